@@ -1,0 +1,140 @@
+//! Ray queries against the scene's triangles: a compressed wide BVH (obvhs' CWBVH, Ylitie et al.
+//! 2017) built once from world-space triangles.
+//!
+//! Takes the scene's triangle corners; gives closest hits (triangle index, distance, barycentrics)
+//! and occlusion tests. Ray origins are offset off surfaces by [`offset_origin`], which scales
+//! with the position's magnitude, so self-intersection stays fixed at any scene scale.
+
+use std::time::Duration;
+
+use glam::{Vec2, Vec3};
+use obvhs::{
+    cwbvh::{builder::build_cwbvh_from_tris, CwBvh},
+    ray::{Ray, RayHit},
+    triangle::Triangle,
+    BvhBuildParams,
+};
+
+/// The closest intersection along a ray.
+#[derive(Clone, Copy, Debug)]
+pub struct Hit {
+    /// Index of the triangle in the scene's list.
+    pub triangle: u32,
+    /// Distance along the (unit) ray direction.
+    pub t: f32,
+    /// Barycentric coordinates of the hit (weights of corners 1 and 2).
+    pub barycentric: Vec2,
+}
+
+/// The BVH over the scene's triangles.
+pub struct Accel {
+    bvh: Option<CwBvh>,
+    triangles: Vec<Triangle>,
+}
+
+impl Accel {
+    /// Builds the BVH over `corners` (one entry per triangle, in scene order).
+    pub fn build(corners: &[[Vec3; 3]]) -> Self {
+        let triangles: Vec<Triangle> = corners
+            .iter()
+            .map(|c| Triangle { v0: c[0].into(), v1: c[1].into(), v2: c[2].into() })
+            .collect();
+        let bvh = (!triangles.is_empty()).then(|| {
+            build_cwbvh_from_tris(&triangles, BvhBuildParams::medium_build(), &mut Duration::default())
+        });
+        Accel { bvh, triangles }
+    }
+
+    fn ray(origin: Vec3, direction: Vec3, t_max: f32) -> Ray {
+        Ray::new(origin.into(), direction.into(), 0.0, t_max)
+    }
+
+    /// The closest hit along the ray from `origin` in the unit `direction` before `t_max`.
+    pub fn intersect(&self, origin: Vec3, direction: Vec3, t_max: f32) -> Option<Hit> {
+        let bvh = self.bvh.as_ref()?;
+        let ray = Self::ray(origin, direction, t_max);
+        let mut hit = RayHit::none();
+        let found = bvh.ray_traverse(ray, &mut hit, |ray, slot| {
+            self.triangles[bvh.primitive_indices[slot] as usize].intersect(ray)
+        });
+        if !found {
+            return None;
+        }
+        let triangle = bvh.primitive_indices[hit.primitive_id as usize];
+        let barycentric = barycentric(&self.triangles[triangle as usize], origin + direction * hit.t);
+        Some(Hit { triangle, t: hit.t, barycentric })
+    }
+
+    /// Whether anything lies on the ray from `origin` in the unit `direction` before `t_max`.
+    pub fn occluded(&self, origin: Vec3, direction: Vec3, t_max: f32) -> bool {
+        let Some(bvh) = self.bvh.as_ref() else { return false };
+        let ray = Self::ray(origin, direction, t_max);
+        !bvh.ray_traverse_miss(ray, |ray, slot| {
+            self.triangles[bvh.primitive_indices[slot] as usize].intersect(ray)
+        })
+    }
+}
+
+/// The barycentric coordinates (weights of v1 and v2) of `p`, a point on triangle `tri`.
+fn barycentric(tri: &Triangle, p: Vec3) -> Vec2 {
+    let (v0, e1, e2) = (Vec3::from(tri.v0), Vec3::from(tri.v1 - tri.v0), Vec3::from(tri.v2 - tri.v0));
+    let n = e1.cross(e2);
+    let inv = 1.0 / n.length_squared();
+    let d = p - v0;
+    let b1 = d.cross(e2).dot(n) * inv;
+    let b2 = e1.cross(d).dot(n) * inv;
+    Vec2::new(b1, b2).clamp(Vec2::ZERO, Vec2::ONE)
+}
+
+/// A ray origin moved off the surface at `p` (geometric normal `ng`) to the side of `direction`,
+/// by a few ULPs of `p`'s coordinates (Wächter & Binder 2019, "A Fast and Robust Method for
+/// Avoiding Self-Intersection", Ray Tracing Gems chapter 6).
+pub fn offset_origin(p: Vec3, ng: Vec3, direction: Vec3) -> Vec3 {
+    const ORIGIN: f32 = 1.0 / 32.0;
+    const FLOAT_SCALE: f32 = 1.0 / 65536.0;
+    const INT_SCALE: f32 = 256.0;
+    let n = if ng.dot(direction) < 0.0 { -ng } else { ng };
+    let offset = |p: f32, n: f32| {
+        let of_i = (INT_SCALE * n) as i32;
+        let bits = p.to_bits() as i32;
+        let moved = f32::from_bits((bits + if p < 0.0 { -of_i } else { of_i }) as u32);
+        if p.abs() < ORIGIN { p + FLOAT_SCALE * n } else { moved }
+    };
+    Vec3::new(offset(p.x, n.x), offset(p.y, n.y), offset(p.z, n.z))
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn hits_the_closest_of_two_triangles_and_maps_its_index() {
+        let quad = |z: f32| [Vec3::new(-1.0, -1.0, z), Vec3::new(1.0, -1.0, z), Vec3::new(0.0, 1.0, z)];
+        let accel = Accel::build(&[quad(5.0), quad(2.0)]);
+        let hit = accel.intersect(Vec3::ZERO, Vec3::Z, f32::INFINITY).unwrap();
+        assert_eq!(hit.triangle, 1);
+        assert!((hit.t - 2.0).abs() < 1e-6);
+        assert!(accel.occluded(Vec3::ZERO, Vec3::Z, 3.0));
+        assert!(!accel.occluded(Vec3::ZERO, Vec3::Z, 1.5));
+        assert!(accel.intersect(Vec3::ZERO, -Vec3::Z, f32::INFINITY).is_none());
+        // Barycentrics weight corners 1 and 2.
+        let origin = Vec3::new(0.3, -0.2, 0.0);
+        let hit = accel.intersect(origin, Vec3::Z, f32::INFINITY).unwrap();
+        let c = quad(2.0);
+        let b = hit.barycentric;
+        let p = c[0] * (1.0 - b.x - b.y) + c[1] * b.x + c[2] * b.y;
+        assert!((p - (origin + Vec3::Z * hit.t)).length() < 1e-5, "{p}");
+    }
+
+    #[test]
+    fn offset_origins_leave_the_surface_at_any_scale() {
+        for scale in [1e-4f32, 1.0, 1e5, 1e6] {
+            let c = [Vec3::new(0.0, 0.0, 0.0), Vec3::new(1.0, 0.0, 0.0), Vec3::new(0.0, 1.0, 0.0)]
+                .map(|v| v * scale + Vec3::splat(scale * 0.3));
+            let accel = Accel::build(&[c]);
+            let p = (c[0] + c[1] + c[2]) / 3.0;
+            let o = offset_origin(p, Vec3::Z, Vec3::new(0.3, 0.2, 1.0).normalize());
+            assert!(!accel.occluded(o, Vec3::new(0.3, 0.2, 1.0).normalize(), f32::INFINITY), "{scale}");
+        }
+    }
+}

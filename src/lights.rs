@@ -1,0 +1,307 @@
+//! Lights: emission, next-event estimation toward a point, and photon emission.
+//!
+//! Radiometric units (one place for all of them, DESIGN.md "Input"): every light's colour is an
+//! [`RgbSpectrum`] shape times D65 normalised to luminance 1, times a scalar in the unit below.
+//! - point and spot: radiant intensity in W/sr (glTF candela / 683; Blender writes W / (4 pi) * 683);
+//! - sun: irradiance in W/m^2 on a plane facing it (glTF lux / 683);
+//! - emitting triangles (emissive meshes and area lights): radiance in W / (m^2 sr)
+//!   (glTF emissive factor times `emissive_strength`, no 683; area lights P / (pi A));
+//! - world: radiance in W / (m^2 sr).
+//!
+//! Distant lights (sun, world) emit photons from a disc covering the scene's bounding sphere.
+
+use glam::{Vec2, Vec3};
+use std::f32::consts::PI;
+
+use crate::sampling::{basis, square_to_cone, square_to_cosine_hemisphere, square_to_disc, square_to_sphere, square_to_triangle};
+use crate::spectrum::{d65, RgbSpectrum};
+
+/// The scene's bounding sphere, where distant lights start their photons.
+#[derive(Clone, Copy, Debug, Default)]
+pub struct BoundingSphere {
+    /// Centre.
+    pub centre: Vec3,
+    /// Radius (positive).
+    pub radius: f32,
+}
+
+/// A light source.
+#[derive(Clone, Debug)]
+pub enum Light {
+    /// An isotropic point light of radiant intensity `intensity` (W/sr).
+    Point {
+        /// Position.
+        position: Vec3,
+        /// Radiant intensity spectrum shape, W/sr.
+        intensity: RgbSpectrum,
+    },
+    /// A spot light: a point light inside a cone, with glTF's smooth falloff.
+    Spot {
+        /// Position.
+        position: Vec3,
+        /// Unit axis of the cone (the direction light travels).
+        axis: Vec3,
+        /// Radiant intensity on the axis, W/sr.
+        intensity: RgbSpectrum,
+        /// Cosine of the inner cone angle (full intensity inside).
+        cos_inner: f32,
+        /// Cosine of the outer cone angle (no light outside).
+        cos_outer: f32,
+    },
+    /// A distant light with an angular diameter (soft shadows) or none.
+    Sun {
+        /// Unit direction the light travels.
+        direction: Vec3,
+        /// Irradiance on a plane facing the sun, W/m^2.
+        irradiance: RgbSpectrum,
+        /// Cosine of the sun's angular radius (1 for a delta sun).
+        cos_max: f32,
+        /// Where its photons start.
+        sphere: BoundingSphere,
+    },
+    /// One emitting triangle of an emissive mesh or an area light.
+    Triangle {
+        /// Its corners.
+        corners: [Vec3; 3],
+        /// Emitted radiance, W / (m^2 sr).
+        radiance: RgbSpectrum,
+        /// Whether both faces emit (meshes) or only the front (area lights).
+        both_sides: bool,
+    },
+    /// Light from infinitely far away in every direction.
+    World(World),
+}
+
+/// The world: light from every direction, seen by rays that leave the scene.
+#[derive(Clone, Debug)]
+pub struct World {
+    /// Radiance, W / (m^2 sr), the same from every direction.
+    pub radiance: RgbSpectrum,
+    /// Where its photons start.
+    pub sphere: BoundingSphere,
+}
+
+impl World {
+    /// Spectral radiance arriving from direction `-dir` along a ray of direction `dir`.
+    pub fn radiance(&self, _dir: Vec3, lambda_nm: f32) -> f32 {
+        self.radiance.eval(lambda_nm) * d65(lambda_nm)
+    }
+}
+
+/// Light arriving at a point, sampled for next-event estimation.
+#[derive(Clone, Copy, Debug)]
+pub struct LightSample {
+    /// Unit direction from the point toward the light.
+    pub wi: Vec3,
+    /// Distance to the light (infinite for distant lights).
+    pub distance: f32,
+    /// Incident radiance over the density of `wi` (cosine at the receiver not included).
+    pub radiance_over_pdf: f32,
+}
+
+/// A photon leaving a light.
+#[derive(Clone, Copy, Debug)]
+pub struct EmittedPhoton {
+    /// Where it starts.
+    pub origin: Vec3,
+    /// Unit direction of travel.
+    pub direction: Vec3,
+    /// Its flux over the density of its origin and direction, W.
+    pub flux: f32,
+}
+
+/// The spectral value of a light's scalar shape at `lambda_nm`, D65 included.
+fn spectral(shape: &RgbSpectrum, lambda_nm: f32) -> f32 {
+    shape.eval(lambda_nm) * d65(lambda_nm)
+}
+
+/// glTF's spot falloff: the square of a linear ramp between the outer and inner cone.
+fn spot_falloff(cos_theta: f32, cos_inner: f32, cos_outer: f32) -> f32 {
+    let scale = 1.0 / (cos_inner - cos_outer).max(1e-4);
+    ((cos_theta - cos_outer) * scale).clamp(0.0, 1.0).powi(2)
+}
+
+/// A point on the disc of `sphere` facing `direction`, upstream of the scene.
+fn disc_origin(sphere: &BoundingSphere, direction: Vec3, u: Vec2) -> Vec3 {
+    let (t, b) = basis(direction);
+    let d = square_to_disc(u) * sphere.radius;
+    sphere.centre - direction * sphere.radius + t * d.x + b * d.y
+}
+
+fn triangle_area(c: &[Vec3; 3]) -> f32 {
+    0.5 * (c[1] - c[0]).cross(c[2] - c[0]).length()
+}
+
+fn triangle_normal(c: &[Vec3; 3]) -> Vec3 {
+    (c[1] - c[0]).cross(c[2] - c[0]).normalize_or_zero()
+}
+
+fn point_in_triangle(c: &[Vec3; 3], u: Vec2) -> Vec3 {
+    let b = square_to_triangle(u);
+    c[0] * (1.0 - b.x - b.y) + c[1] * b.x + c[2] * b.y
+}
+
+impl Light {
+    /// Total emitted luminous power, for choosing lights in proportion to it.
+    pub fn power(&self) -> f64 {
+        let power = match self {
+            Light::Point { intensity, .. } => 4.0 * PI as f64 * intensity.luminance(),
+            Light::Spot { intensity, cos_outer, .. } => {
+                2.0 * PI as f64 * (1.0 - f64::from(*cos_outer)) * intensity.luminance()
+            }
+            Light::Sun { irradiance, sphere, .. } => {
+                irradiance.luminance() * f64::from(PI * sphere.radius * sphere.radius)
+            }
+            Light::Triangle { corners, radiance, both_sides } => {
+                let sides = if *both_sides { 2.0 } else { 1.0 };
+                sides * radiance.luminance() * f64::from(PI * triangle_area(corners))
+            }
+            Light::World(world) => {
+                let r = f64::from(world.sphere.radius);
+                world.radiance.luminance() * 4.0 * std::f64::consts::PI * std::f64::consts::PI * r * r
+            }
+        };
+        if power.is_finite() { power.max(0.0) } else { 0.0 }
+    }
+
+    /// Samples light arriving at `p` (for next-event estimation); `None` when none arrives.
+    pub fn sample_incident(&self, p: Vec3, u: Vec2, lambda_nm: f32) -> Option<LightSample> {
+        match self {
+            Light::Point { position, intensity } => {
+                let (wi, distance) = direction_and_distance(p, *position)?;
+                let radiance_over_pdf = spectral(intensity, lambda_nm) / (distance * distance);
+                Some(LightSample { wi, distance, radiance_over_pdf })
+            }
+            Light::Spot { position, axis, intensity, cos_inner, cos_outer } => {
+                let (wi, distance) = direction_and_distance(p, *position)?;
+                let falloff = spot_falloff(-wi.dot(*axis), *cos_inner, *cos_outer);
+                let radiance_over_pdf = spectral(intensity, lambda_nm) * falloff / (distance * distance);
+                (falloff > 0.0).then_some(LightSample { wi, distance, radiance_over_pdf })
+            }
+            Light::Sun { direction, irradiance, cos_max, .. } => {
+                let (t, b) = basis(-*direction);
+                let local = square_to_cone(u, *cos_max);
+                let wi = (t * local.x + b * local.y - *direction * local.z).normalize();
+                let radiance_over_pdf = spectral(irradiance, lambda_nm);
+                Some(LightSample { wi, distance: f32::INFINITY, radiance_over_pdf })
+            }
+            Light::Triangle { corners, radiance, both_sides } => {
+                let q = point_in_triangle(corners, u);
+                let (wi, distance) = direction_and_distance(p, q)?;
+                let cos_light = -triangle_normal(corners).dot(wi);
+                let cos_light = if *both_sides { cos_light.abs() } else { cos_light };
+                if cos_light <= 0.0 {
+                    return None;
+                }
+                let area = triangle_area(corners);
+                let radiance_over_pdf = spectral(radiance, lambda_nm) * area * cos_light / (distance * distance);
+                Some(LightSample { wi, distance, radiance_over_pdf })
+            }
+            Light::World(world) => {
+                let wi = square_to_sphere(u);
+                let radiance_over_pdf = world.radiance(-wi, lambda_nm) * 4.0 * PI;
+                Some(LightSample { wi, distance: f32::INFINITY, radiance_over_pdf })
+            }
+        }
+    }
+
+    /// Samples a photon leaving the light at `lambda_nm`.
+    pub fn emit_photon(&self, u_position: Vec2, u_direction: Vec2, lambda_nm: f32) -> Option<EmittedPhoton> {
+        let photon = match self {
+            Light::Point { position, intensity } => EmittedPhoton {
+                origin: *position,
+                direction: square_to_sphere(u_direction),
+                flux: spectral(intensity, lambda_nm) * 4.0 * PI,
+            },
+            Light::Spot { position, axis, intensity, cos_inner, cos_outer } => {
+                let (t, b) = basis(*axis);
+                let local = square_to_cone(u_direction, *cos_outer);
+                let falloff = spot_falloff(local.z, *cos_inner, *cos_outer);
+                let solid_angle = 2.0 * PI * (1.0 - cos_outer);
+                EmittedPhoton {
+                    origin: *position,
+                    direction: (t * local.x + b * local.y + *axis * local.z).normalize(),
+                    flux: spectral(intensity, lambda_nm) * falloff * solid_angle,
+                }
+            }
+            Light::Sun { direction, irradiance, cos_max, sphere } => {
+                let (t, b) = basis(*direction);
+                let local = square_to_cone(u_direction, *cos_max);
+                let direction = (t * local.x + b * local.y + *direction * local.z).normalize();
+                EmittedPhoton {
+                    origin: disc_origin(sphere, direction, u_position),
+                    direction,
+                    flux: spectral(irradiance, lambda_nm) * PI * sphere.radius * sphere.radius,
+                }
+            }
+            Light::Triangle { corners, radiance, both_sides } => {
+                let mut n = triangle_normal(corners);
+                let mut u = u_direction;
+                let mut sides = 1.0;
+                if *both_sides {
+                    sides = 2.0;
+                    if u.x < 0.5 {
+                        n = -n;
+                        u.x *= 2.0;
+                    } else {
+                        u.x = 2.0 * u.x - 1.0;
+                    }
+                }
+                let (t, b) = basis(n);
+                let local = square_to_cosine_hemisphere(u);
+                EmittedPhoton {
+                    origin: point_in_triangle(corners, u_position),
+                    direction: (t * local.x + b * local.y + n * local.z).normalize(),
+                    flux: spectral(radiance, lambda_nm) * PI * triangle_area(corners) * sides,
+                }
+            }
+            Light::World(world) => {
+                let direction = square_to_sphere(u_direction);
+                let r = world.sphere.radius;
+                EmittedPhoton {
+                    origin: disc_origin(&world.sphere, direction, u_position),
+                    direction,
+                    flux: world.radiance(direction, lambda_nm) * 4.0 * PI * PI * r * r,
+                }
+            }
+        };
+        (photon.flux > 0.0 && photon.flux.is_finite()).then_some(photon)
+    }
+}
+
+/// Unit direction from `p` to `q` and their distance; `None` if they coincide.
+fn direction_and_distance(p: Vec3, q: Vec3) -> Option<(Vec3, f32)> {
+    let d = q - p;
+    let distance = d.length();
+    (distance > 0.0 && distance.is_finite()).then(|| (d / distance, distance))
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn triangle_light_irradiance_matches_the_closed_form() {
+        // A 2 x 2 square emitter (two triangles) at height 1 above a point: irradiance is pi L
+        // times the form factor 4 * 2 / (2 pi) * atan(1 / sqrt 2) / sqrt 2 (parallel rectangles).
+        let s = 1.0;
+        let c = [Vec3::new(-s, -s, 1.0), Vec3::new(s, -s, 1.0), Vec3::new(s, s, 1.0), Vec3::new(-s, s, 1.0)];
+        let lights = [
+            Light::Triangle { corners: [c[0], c[2], c[1]], radiance: RgbSpectrum::constant(1.0), both_sides: false },
+            Light::Triangle { corners: [c[0], c[3], c[2]], radiance: RgbSpectrum::constant(1.0), both_sides: false },
+        ];
+        let n = 40000;
+        let mut irradiance = 0.0;
+        for light in &lights {
+            for i in 0..n {
+                let u = Vec2::new((i as f32 + 0.5) / n as f32, ((i * 7919) % n) as f32 / n as f32);
+                if let Some(s) = light.sample_incident(Vec3::ZERO, u, 555.0) {
+                    irradiance += s.radiance_over_pdf * s.wi.z.max(0.0) / n as f32;
+                }
+            }
+        }
+        let form_factor = 4.0 / PI * (0.5f32.sqrt()).atan() * 0.5f32.sqrt();
+        let expected = PI * form_factor * d65(555.0);
+        assert!((irradiance / expected - 1.0).abs() < 0.02, "{irradiance} vs {expected}");
+    }
+}

@@ -1,0 +1,62 @@
+//! A smooth dielectric boundary: exact Fresnel reflectance, Snell refraction and total internal
+//! reflection. Reflection or refraction is chosen with probability F, so the weight is 1, except
+//! that radiance (camera paths) is scaled by 1 / eta^2 on refraction while importance (photons)
+//! is not: the BTDF is not symmetric (Veach 1997, 5.2; pbrt-v4 section 9.5.2).
+
+use glam::Vec3;
+
+use super::{conductor::reflect, BsdfSample, Transport};
+
+/// Unpolarised Fresnel reflectance for `cos_i` (cosine on the incident side) and relative index
+/// `eta` (transmitted over incident).
+pub fn fresnel_dielectric(cos_i: f32, eta: f32) -> f32 {
+    let cos_i = cos_i.clamp(0.0, 1.0);
+    let sin2_t = (1.0 - cos_i * cos_i) / (eta * eta);
+    if sin2_t >= 1.0 {
+        return 1.0;
+    }
+    let cos_t = (1.0 - sin2_t).sqrt();
+    let r_parallel = (eta * cos_i - cos_t) / (eta * cos_i + cos_t);
+    let r_perpendicular = (cos_i - eta * cos_t) / (cos_i + eta * cos_t);
+    (r_parallel * r_parallel + r_perpendicular * r_perpendicular) / 2.0
+}
+
+/// Reflects or refracts `wo` at a boundary of geometric normal `ng` (pointing outside).
+pub fn sample(ior: f32, ng: Vec3, wo: Vec3, u: f32, mode: Transport) -> Option<BsdfSample> {
+    let entering = ng.dot(wo) > 0.0;
+    let (n, eta) = if entering { (ng, ior) } else { (-ng, 1.0 / ior) };
+    let cos_i = n.dot(wo).min(1.0);
+    let f = fresnel_dielectric(cos_i, eta);
+    if u < f {
+        return Some(BsdfSample { wi: reflect(wo, n), weight: 1.0, is_delta: true });
+    }
+    let sin2_t = (1.0 - cos_i * cos_i) / (eta * eta);
+    let cos_t = (1.0 - sin2_t).max(0.0).sqrt();
+    let wi = (-wo / eta + (cos_i / eta - cos_t) * n).normalize();
+    let weight = match mode {
+        Transport::Radiance => 1.0 / (eta * eta),
+        Transport::Importance => 1.0,
+    };
+    Some(BsdfSample { wi, weight, is_delta: true })
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn fresnel_at_normal_incidence_and_total_internal_reflection() {
+        assert!((fresnel_dielectric(1.0, 1.5) - 0.04).abs() < 1e-6);
+        assert_eq!(fresnel_dielectric(0.1, 1.0 / 1.5), 1.0);
+        assert!(fresnel_dielectric(1.0, 1.0) < 1e-12);
+    }
+
+    #[test]
+    fn refraction_obeys_snell() {
+        let wo = Vec3::new(0.6, 0.0, 0.8);
+        let s = sample(1.5, Vec3::Z, wo, 0.99, Transport::Importance).unwrap();
+        let sin_t = (1.0 - s.wi.z * s.wi.z).sqrt();
+        assert!((sin_t * 1.5 - 0.6).abs() < 1e-5);
+        assert!(s.wi.z < 0.0 && s.wi.x < 0.0);
+    }
+}

@@ -1,0 +1,25 @@
+//! Lambertian reflection: `f = albedo / pi` on the side of `wo`.
+
+use glam::{Vec2, Vec3};
+use std::f32::consts::FRAC_1_PI;
+
+use super::{face_toward, BsdfSample};
+use crate::sampling::{basis, square_to_cosine_hemisphere};
+
+/// `albedo / pi` when `wo` and `wi` are on the same side of `n`, else zero.
+pub fn eval(albedo: f32, n: Vec3, wo: Vec3, wi: Vec3) -> f32 {
+    if n.dot(wo) * n.dot(wi) > 0.0 {
+        albedo * FRAC_1_PI
+    } else {
+        0.0
+    }
+}
+
+/// Cosine-weighted reflection on the side of `wo`: the weight is the albedo.
+pub fn sample(albedo: f32, n: Vec3, wo: Vec3, u: Vec2) -> Option<BsdfSample> {
+    let n = face_toward(n, wo);
+    let (t, b) = basis(n);
+    let local = square_to_cosine_hemisphere(u);
+    let wi = (t * local.x + b * local.y + n * local.z).normalize();
+    Some(BsdfSample { wi, weight: albedo, is_delta: false })
+}

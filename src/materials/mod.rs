@@ -1,0 +1,196 @@
+//! Materials (what the glTF file says) and BSDFs (a material resolved at one wavelength).
+//!
+//! A [`Material`] holds the glTF metallic-roughness parameters with spectra; [`Material::bsdf`]
+//! resolves it at the pass wavelength into a closed [`Bsdf`] with scalar parameters. Where the
+//! glTF material mixes lobes (transmission or metallic between 0 and 1), one lobe is chosen by a
+//! random number with its weight as probability, which is unbiased.
+//!
+//! Directions are world-space unit vectors; `wo` and `wi` both point away from the surface.
+
+mod conductor;
+mod dielectric;
+mod diffuse;
+mod microfacet;
+
+use glam::{Vec2, Vec3};
+
+use crate::spectrum::{d65, RgbSpectrum};
+
+pub use dielectric::fresnel_dielectric;
+
+/// Roughness below this is treated as perfectly smooth (a delta BSDF).
+pub const SMOOTH_ROUGHNESS: f32 = 0.02;
+
+/// A material's base colour: a constant spectrum or an index into the scene's textures.
+#[derive(Clone, Debug)]
+pub enum BaseColour {
+    /// The same reflectance everywhere.
+    Constant(RgbSpectrum),
+    /// A texture (index into `Scene::textures`) times a factor.
+    Texture {
+        /// Index into the scene's texture list.
+        texture: usize,
+    },
+}
+
+/// A surface's material: glTF metallic-roughness with transmission, IOR and emission.
+#[derive(Clone, Debug)]
+pub struct Material {
+    /// The material's name, for messages.
+    pub name: String,
+    /// Base colour (reflectance, or the conductor's normal-incidence reflectance).
+    pub base_colour: BaseColour,
+    /// glTF `metallicFactor`.
+    pub metallic: f32,
+    /// glTF `roughnessFactor` (perceptual; alpha = roughness^2).
+    pub roughness: f32,
+    /// `KHR_materials_transmission` factor.
+    pub transmission: f32,
+    /// `KHR_materials_ior` (1.5 when absent).
+    pub ior: f32,
+    /// Emitted radiance shape (times D65) in W / (m^2 sr), or `None`.
+    pub emission: Option<RgbSpectrum>,
+    /// Whether emission leaves both faces (meshes) or only the front (area lights).
+    pub emits_both_sides: bool,
+}
+
+impl Material {
+    /// A grey Lambertian material, for meshes without one.
+    pub fn default_grey() -> Self {
+        Material {
+            name: "default".into(),
+            base_colour: BaseColour::Constant(RgbSpectrum::constant(0.8)),
+            metallic: 0.0,
+            roughness: 1.0,
+            transmission: 0.0,
+            ior: 1.5,
+            emission: None,
+            emits_both_sides: true,
+        }
+    }
+
+    /// The emitted spectral radiance at `lambda_nm` leaving toward `wo` from a face of normal `ng`.
+    pub fn emitted(&self, lambda_nm: f32, ng: Vec3, wo: Vec3) -> f32 {
+        match &self.emission {
+            Some(spectrum) if self.emits_both_sides || ng.dot(wo) > 0.0 => {
+                spectrum.eval(lambda_nm) * d65(lambda_nm)
+            }
+            _ => 0.0,
+        }
+    }
+
+    /// The BSDF at `lambda_nm`, with `reflectance` the base colour already looked up and
+    /// `u_lobe` a uniform number that picks a lobe where the material mixes several.
+    pub fn bsdf(&self, reflectance: f32, u_lobe: f32) -> Bsdf {
+        if u_lobe < self.transmission {
+            return Bsdf::Dielectric { ior: self.ior };
+        }
+        let u_lobe = (u_lobe - self.transmission) / (1.0 - self.transmission);
+        let alpha = self.roughness * self.roughness;
+        if u_lobe < self.metallic {
+            if self.roughness < SMOOTH_ROUGHNESS {
+                return Bsdf::Conductor { f0: reflectance };
+            }
+            return Bsdf::RoughConductor { f0: reflectance, alpha };
+        }
+        if self.emission.is_some() && reflectance == 0.0 {
+            return Bsdf::Black;
+        }
+        Bsdf::Diffuse { albedo: reflectance }
+    }
+}
+
+/// A BSDF at one wavelength.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub enum Bsdf {
+    /// Lambertian reflection of albedo in [0, 1].
+    Diffuse {
+        /// Albedo at the pass wavelength.
+        albedo: f32,
+    },
+    /// A perfect mirror with Schlick's Fresnel from `f0`.
+    Conductor {
+        /// Normal-incidence reflectance.
+        f0: f32,
+    },
+    /// GGX microfacet reflection with Schlick's Fresnel.
+    RoughConductor {
+        /// Normal-incidence reflectance.
+        f0: f32,
+        /// GGX alpha (roughness squared).
+        alpha: f32,
+    },
+    /// A smooth dielectric boundary: Fresnel reflection and refraction with total internal reflection.
+    Dielectric {
+        /// Index of refraction of the inside relative to the outside.
+        ior: f32,
+    },
+    /// Absorbs everything (a light's own surface).
+    Black,
+}
+
+/// What a path carries: radiance (camera paths) or importance (photons). Only refraction cares.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Transport {
+    /// Camera paths, gathering radiance.
+    Radiance,
+    /// Photon paths, carrying flux.
+    Importance,
+}
+
+/// A direction sampled from a BSDF.
+#[derive(Clone, Copy, Debug)]
+pub struct BsdfSample {
+    /// The new direction, away from the surface.
+    pub wi: Vec3,
+    /// `f * |cos| / pdf`: the factor the path throughput is multiplied by.
+    pub weight: f32,
+    /// Whether the sample came from a delta lobe.
+    pub is_delta: bool,
+}
+
+impl Bsdf {
+    /// Whether every direction it scatters into is a delta (mirror or refraction).
+    pub fn is_delta(&self) -> bool {
+        matches!(self, Bsdf::Conductor { .. } | Bsdf::Dielectric { .. })
+    }
+
+    /// The BSDF value `f(wo, wi)` (zero for delta lobes) with shading normal `n`.
+    pub fn eval(&self, n: Vec3, wo: Vec3, wi: Vec3) -> f32 {
+        match *self {
+            Bsdf::Diffuse { albedo } => diffuse::eval(albedo, n, wo, wi),
+            Bsdf::RoughConductor { f0, alpha } => conductor::eval_rough(f0, alpha, n, wo, wi),
+            _ => 0.0,
+        }
+    }
+
+    /// Samples `wi` for `wo` at a surface of shading normal `n` and geometric normal `ng`.
+    pub fn sample(&self, frame: ShadingFrame, wo: Vec3, u: Vec2, u_lobe: f32, mode: Transport) -> Option<BsdfSample> {
+        let ShadingFrame { n, ng } = frame;
+        match *self {
+            Bsdf::Diffuse { albedo } => diffuse::sample(albedo, n, wo, u),
+            Bsdf::Conductor { f0 } => conductor::sample_smooth(f0, n, wo),
+            Bsdf::RoughConductor { f0, alpha } => conductor::sample_rough(f0, alpha, n, wo, u),
+            Bsdf::Dielectric { ior } => dielectric::sample(ior, ng, wo, u_lobe, mode),
+            Bsdf::Black => None,
+        }
+    }
+}
+
+/// The normals at a surface point: shading (interpolated) and geometric (the triangle's).
+#[derive(Clone, Copy, Debug)]
+pub struct ShadingFrame {
+    /// Shading normal.
+    pub n: Vec3,
+    /// Geometric normal, pointing to the outside of the mesh.
+    pub ng: Vec3,
+}
+
+/// `n` flipped, if needed, to the side of `w`.
+pub fn face_toward(n: Vec3, w: Vec3) -> Vec3 {
+    if n.dot(w) < 0.0 {
+        -n
+    } else {
+        n
+    }
+}

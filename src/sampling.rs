@@ -1,0 +1,176 @@
+//! Random streams, the per-pass low-discrepancy sequence, and warps from the unit square.
+//!
+//! Every stream is keyed by `(seed, pass, index)` alone, never by thread or time, so a render is
+//! the same bits with any thread count and any pass range (DESIGN.md, "Determinism").
+
+use glam::{Vec2, Vec3};
+use rand::RngExt;
+use rand_pcg::Pcg32;
+
+/// Which kind of stream a key belongs to, so that eye and photon streams never coincide.
+#[derive(Clone, Copy)]
+pub enum Stream {
+    /// One per pixel and pass.
+    Eye = 1,
+    /// One per photon path and pass.
+    Photon = 2,
+}
+
+/// SplitMix64's finaliser: a good 64-bit mix.
+fn mix(mut z: u64) -> u64 {
+    z = (z ^ (z >> 30)).wrapping_mul(0xbf58_476d_1ce4_e5b9);
+    z = (z ^ (z >> 27)).wrapping_mul(0x94d0_49bb_1331_11eb);
+    z ^ (z >> 31)
+}
+
+/// The random stream for `(seed, stream, pass, index)`.
+pub fn stream(seed: u64, kind: Stream, pass: u64, index: u64) -> Sampler {
+    let key = mix(mix(mix(seed ^ 0x9e37_79b9_7f4a_7c15) ^ kind as u64) ^ pass);
+    Sampler(Pcg32::new(mix(key ^ index), key | 1))
+}
+
+/// A stream of uniform numbers in [0, 1).
+pub struct Sampler(Pcg32);
+
+impl Sampler {
+    /// One uniform number in [0, 1).
+    pub fn next_1d(&mut self) -> f32 {
+        self.0.random::<f32>()
+    }
+
+    /// Two uniform numbers in [0, 1).
+    pub fn next_2d(&mut self) -> Vec2 {
+        Vec2::new(self.next_1d(), self.next_1d())
+    }
+}
+
+/// The pass's point of the golden-ratio (Kronecker) sequence, rotated by the seed: stratified over
+/// passes, so wavelengths cover the spectrum evenly however the passes are split.
+pub fn pass_sample(seed: u64, pass: u64) -> f32 {
+    const INVERSE_GOLDEN_RATIO: f64 = 0.618_033_988_749_894_9;
+    let offset = (mix(seed) >> 11) as f64 / (1u64 << 53) as f64;
+    (offset + pass as f64 * INVERSE_GOLDEN_RATIO).fract() as f32
+}
+
+/// Concentric map of the square to the unit disc (Shirley & Chiu 1997).
+pub fn square_to_disc(u: Vec2) -> Vec2 {
+    let p = 2.0 * u - Vec2::ONE;
+    if p == Vec2::ZERO {
+        return Vec2::ZERO;
+    }
+    let (r, theta) = if p.x.abs() > p.y.abs() {
+        (p.x, std::f32::consts::FRAC_PI_4 * (p.y / p.x))
+    } else {
+        (p.y, std::f32::consts::FRAC_PI_2 - std::f32::consts::FRAC_PI_4 * (p.x / p.y))
+    };
+    r * Vec2::new(theta.cos(), theta.sin())
+}
+
+/// Cosine-weighted direction about +z; density `cos(theta) / pi`.
+pub fn square_to_cosine_hemisphere(u: Vec2) -> Vec3 {
+    let d = square_to_disc(u);
+    Vec3::new(d.x, d.y, (1.0 - d.length_squared()).max(0.0).sqrt())
+}
+
+/// Uniform direction in the cone of half-angle `acos(cos_max)` about +z; density
+/// `1 / (2 pi (1 - cos_max))`.
+pub fn square_to_cone(u: Vec2, cos_max: f32) -> Vec3 {
+    let cos_theta = 1.0 - u.x * (1.0 - cos_max);
+    let sin_theta = (1.0 - cos_theta * cos_theta).max(0.0).sqrt();
+    let phi = std::f32::consts::TAU * u.y;
+    Vec3::new(sin_theta * phi.cos(), sin_theta * phi.sin(), cos_theta)
+}
+
+/// Uniform direction on the sphere; density `1 / (4 pi)`.
+pub fn square_to_sphere(u: Vec2) -> Vec3 {
+    square_to_cone(u, -1.0)
+}
+
+/// Uniform barycentric coordinates (b1, b2) on a triangle (Heitz 2019, "A Low-Distortion Map
+/// Between Triangle and Square").
+pub fn square_to_triangle(u: Vec2) -> Vec2 {
+    if u.y > u.x {
+        let b0 = u.x / 2.0;
+        Vec2::new(b0, u.y - b0)
+    } else {
+        let b1 = u.y / 2.0;
+        Vec2::new(u.x - b1, b1)
+    }
+}
+
+/// An orthonormal basis around the unit vector `n` (Duff et al. 2017), as (tangent, bitangent).
+pub fn basis(n: Vec3) -> (Vec3, Vec3) {
+    n.any_orthonormal_pair()
+}
+
+/// A discrete distribution over weights, sampled by inverting its CDF.
+#[derive(Clone, Debug, Default)]
+pub struct Distribution1D {
+    cdf: Vec<f64>,
+    total: f64,
+}
+
+impl Distribution1D {
+    /// The distribution proportional to `weights` (non-negative; all zero gives an empty one).
+    pub fn new(weights: impl IntoIterator<Item = f64>) -> Self {
+        let mut total = 0.0;
+        let cdf = weights
+            .into_iter()
+            .map(|w| {
+                total += w.max(0.0);
+                total
+            })
+            .collect();
+        Distribution1D { cdf, total }
+    }
+
+    /// The sum of the weights.
+    pub fn total(&self) -> f64 {
+        self.total
+    }
+
+    /// An index for the uniform `u`, with its probability; `None` when every weight is zero.
+    pub fn sample(&self, u: f32) -> Option<(usize, f32)> {
+        if self.total <= 0.0 {
+            return None;
+        }
+        let target = f64::from(u) * self.total;
+        let i = self.cdf.partition_point(|&c| c <= target).min(self.cdf.len() - 1);
+        Some((i, self.probability(i)))
+    }
+
+    /// The probability of index `i`.
+    pub fn probability(&self, i: usize) -> f32 {
+        let below = if i == 0 { 0.0 } else { self.cdf[i - 1] };
+        ((self.cdf[i] - below) / self.total) as f32
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn streams_depend_only_on_their_key() {
+        let a = stream(7, Stream::Eye, 3, 11).next_1d();
+        assert_eq!(a, stream(7, Stream::Eye, 3, 11).next_1d());
+        assert_ne!(a, stream(7, Stream::Photon, 3, 11).next_1d());
+        assert_ne!(a, stream(7, Stream::Eye, 4, 11).next_1d());
+    }
+
+    #[test]
+    fn pass_samples_are_stratified() {
+        let mut samples: Vec<f32> = (0..64).map(|i| pass_sample(1, i)).collect();
+        samples.sort_by(f32::total_cmp);
+        let largest_gap = samples.windows(2).map(|w| w[1] - w[0]).fold(0.0, f32::max);
+        assert!(largest_gap < 3.0 / 64.0, "{largest_gap}");
+    }
+
+    #[test]
+    fn distribution_picks_by_weight() {
+        let d = Distribution1D::new([1.0, 0.0, 3.0]);
+        assert_eq!(d.sample(0.1), Some((0, 0.25)));
+        assert_eq!(d.sample(0.5), Some((2, 0.75)));
+        assert!(Distribution1D::new([0.0]).sample(0.5).is_none());
+    }
+}

@@ -1,0 +1,169 @@
+//! RGB colours as smooth spectra: Jakob & Hanika 2019, "A Low-Dimensional Function Space for
+//! Efficient Spectral Upsampling".
+//!
+//! A reflectance is `s(lambda) = sigmoid(c0 x^2 + c1 x + c2)` with `x` the wavelength mapped to
+//! [0, 1] over 360..830 nm and `sigmoid(z) = 1/2 + z / (2 sqrt(1 + z^2))`, so it is smooth and
+//! lies in [0, 1]. The coefficients are fitted by Newton's method so that the spectrum, lit by
+//! D65, has the requested linear Rec.709 colour. Light colours (any non-negative RGB) are a
+//! reflectance of `rgb / (2 max)` times `2 max`, times the D65 illuminant.
+
+use glam::{DVec3, Vec3};
+
+use super::tables::{cmf, d65, table_wavelengths, xyz_to_linear_rec709};
+
+/// A smooth spectrum `scale * sigmoid(polynomial)`: a reflectance when `scale <= 1`.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct RgbSpectrum {
+    coefficients: [f32; 3],
+    scale: f32,
+}
+
+const LAMBDA_MIN_NM: f32 = 360.0;
+const LAMBDA_RANGE_NM: f32 = 470.0;
+
+fn sigmoid(z: f64) -> f64 {
+    if z.is_infinite() {
+        return if z > 0.0 { 1.0 } else { 0.0 };
+    }
+    0.5 + z / (2.0 * (1.0 + z * z).sqrt())
+}
+
+/// The sigmoid's inverse on (0, 1), for constant (grey) spectra.
+fn inverse_sigmoid(s: f64) -> f64 {
+    let w = 2.0 * s - 1.0;
+    w / (1.0 - w * w).sqrt()
+}
+
+impl RgbSpectrum {
+    /// A constant spectrum of value `value`.
+    pub fn constant(value: f32) -> Self {
+        RgbSpectrum { coefficients: [0.0, 0.0, f32::INFINITY], scale: value }
+    }
+
+    /// A reflectance whose colour under D65 is `rgb` (linear Rec.709, clamped to [0, 1]).
+    pub fn reflectance(rgb: Vec3) -> Self {
+        let rgb = rgb.clamp(Vec3::ZERO, Vec3::ONE);
+        if rgb.max_element() - rgb.min_element() < 1e-6 {
+            return Self::constant(rgb.x);
+        }
+        RgbSpectrum { coefficients: fit_coefficients(rgb.as_dvec3()), scale: 1.0 }
+    }
+
+    /// The spectral shape of a light of colour `rgb` (linear Rec.709, non-negative); multiply by
+    /// [`super::d65`] to get the emitted spectrum.
+    pub fn illuminant(rgb: Vec3) -> Self {
+        let rgb = rgb.max(Vec3::ZERO);
+        let max = rgb.max_element();
+        if max - rgb.min_element() < 1e-6 * max.max(1e-30) {
+            return Self::constant(max);
+        }
+        let shape = Self::reflectance(rgb / (2.0 * max));
+        RgbSpectrum { scale: 2.0 * max, ..shape }
+    }
+
+    /// The spectrum's value at `lambda_nm`.
+    pub fn eval(&self, lambda_nm: f32) -> f32 {
+        let [c0, c1, c2] = self.coefficients.map(f64::from);
+        if c2.is_infinite() {
+            return self.scale;
+        }
+        let x = f64::from((lambda_nm - LAMBDA_MIN_NM) / LAMBDA_RANGE_NM);
+        self.scale * sigmoid((c0 * x + c1) * x + c2) as f32
+    }
+
+    /// The luminance Y of the spectrum times D65 (1 for a constant spectrum of 1).
+    pub fn luminance(&self) -> f64 {
+        table_wavelengths()
+            .map(|l| f64::from(self.eval(l) * d65(l) * cmf(l).y))
+            .sum()
+    }
+
+    /// The largest value the spectrum takes.
+    pub fn max_value(&self) -> f32 {
+        table_wavelengths().map(|l| self.eval(l)).fold(0.0, f32::max)
+    }
+}
+
+/// Linear Rec.709 colour of reflectance coefficients `c` under D65, with its Jacobian (columns
+/// are d rgb / d c_k).
+fn colour_and_jacobian(c: [f64; 3]) -> (DVec3, [DVec3; 3]) {
+    let mut xyz = DVec3::ZERO;
+    let mut d_xyz = [DVec3::ZERO; 3];
+    for lambda in table_wavelengths() {
+        let x = f64::from((lambda - LAMBDA_MIN_NM) / LAMBDA_RANGE_NM);
+        let z = (c[0] * x + c[1]) * x + c[2];
+        let weight = cmf(lambda).as_dvec3() * f64::from(d65(lambda));
+        xyz += weight * sigmoid(z);
+        let d_sigmoid = 0.5 / (1.0 + z * z).powf(1.5);
+        for (k, power) in [x * x, x, 1.0].into_iter().enumerate() {
+            d_xyz[k] += weight * d_sigmoid * power;
+        }
+    }
+    (xyz_to_linear_rec709(xyz), d_xyz.map(xyz_to_linear_rec709))
+}
+
+/// Newton's method with step halving on the RGB residual, from a grey of the same mean.
+fn fit_coefficients(target: DVec3) -> [f32; 3] {
+    let mean = target.element_sum() / 3.0;
+    let mut c = [0.0, 0.0, inverse_sigmoid(mean.clamp(1e-4, 1.0 - 1e-4))];
+    let (mut rgb, mut jacobian) = colour_and_jacobian(c);
+    for _ in 0..64 {
+        let residual = rgb - target;
+        if residual.abs().max_element() < 1e-7 {
+            break;
+        }
+        let matrix = glam::DMat3::from_cols(jacobian[0], jacobian[1], jacobian[2]);
+        if matrix.determinant().abs() < 1e-300 {
+            break;
+        }
+        let step = matrix.inverse() * residual;
+        let mut t = 1.0;
+        loop {
+            let trial = [c[0] - t * step.x, c[1] - t * step.y, c[2] - t * step.z];
+            let (trial_rgb, trial_jacobian) = colour_and_jacobian(trial);
+            if (trial_rgb - target).length() < residual.length() || t < 1e-3 {
+                (c, rgb, jacobian) = (trial, trial_rgb, trial_jacobian);
+                break;
+            }
+            t *= 0.5;
+        }
+    }
+    c.map(|v| v as f32)
+}
+
+/// The linear Rec.709 colour of `spectrum` times D65 (what a white light reflects off it).
+pub fn colour_under_d65(spectrum: &RgbSpectrum) -> Vec3 {
+    let xyz: DVec3 = table_wavelengths()
+        .map(|l| cmf(l).as_dvec3() * f64::from(d65(l) * spectrum.eval(l)))
+        .sum();
+    xyz_to_linear_rec709(xyz).as_vec3()
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn reflectances_round_trip_and_stay_bounded() {
+        for rgb in [
+            Vec3::splat(0.5),
+            Vec3::new(0.8, 0.1, 0.1),
+            Vec3::new(0.05, 0.6, 0.2),
+            Vec3::new(0.1, 0.2, 0.9),
+            Vec3::new(0.9, 0.9, 0.02),
+        ] {
+            let s = RgbSpectrum::reflectance(rgb);
+            let back = colour_under_d65(&s);
+            assert!((back - rgb).abs().max_element() < 2e-3, "{rgb} came back as {back}");
+            assert!(s.max_value() <= 1.0);
+            assert!(table_wavelengths().all(|l| s.eval(l) >= 0.0));
+        }
+    }
+
+    #[test]
+    fn illuminants_keep_their_colour_and_scale() {
+        let rgb = Vec3::new(4.0, 2.0, 1.0);
+        let back = colour_under_d65(&RgbSpectrum::illuminant(rgb));
+        assert!((back - rgb).abs().max_element() < 1e-2, "{back}");
+    }
+}

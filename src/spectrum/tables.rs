@@ -1,0 +1,69 @@
+//! The CIE tables from `spectra/`, baked at 1 nm by `spectra/build.rs`.
+//!
+//! `d65` is normalised to luminance 1 (its integral against y-bar is 1), and the XYZ to Rec.709
+//! matrix maps that D65 to exactly (1, 1, 1): a white light of radiance 1 renders as RGB 1.
+
+use glam::{DVec3, Vec3};
+
+include!(concat!(env!("OUT_DIR"), "/tables.rs"));
+
+/// Linear interpolation in a 1 nm table starting at `LAMBDA_MIN_NM`; zero outside the range.
+fn lookup(table: &[f32], lambda_nm: f32) -> f32 {
+    let x = lambda_nm - LAMBDA_MIN_NM;
+    if !(0.0..=(table.len() - 1) as f32).contains(&x) {
+        return 0.0;
+    }
+    let i = (x as usize).min(table.len() - 2);
+    let t = x - i as f32;
+    table[i] + t * (table[i + 1] - table[i])
+}
+
+/// The CIE 1931 2-degree colour-matching functions (x-bar, y-bar, z-bar) at `lambda_nm`.
+pub fn cmf(lambda_nm: f32) -> Vec3 {
+    Vec3::new(
+        lookup(&CIE_X, lambda_nm),
+        lookup(&CIE_Y, lambda_nm),
+        lookup(&CIE_Z, lambda_nm),
+    )
+}
+
+/// CIE illuminant D65 at `lambda_nm`, normalised to luminance 1.
+pub fn d65(lambda_nm: f32) -> f32 {
+    lookup(&D65_NORMALISED, lambda_nm)
+}
+
+/// XYZ to linear Rec.709 RGB (white D65, with D65 mapping to exactly 1, 1, 1).
+pub fn xyz_to_linear_rec709(xyz: DVec3) -> DVec3 {
+    let m = XYZ_TO_LINEAR_REC709.map(f64::from);
+    DVec3::new(
+        m[0] * xyz.x + m[1] * xyz.y + m[2] * xyz.z,
+        m[3] * xyz.x + m[4] * xyz.y + m[5] * xyz.z,
+        m[6] * xyz.x + m[7] * xyz.y + m[8] * xyz.z,
+    )
+}
+
+/// The wavelengths of the baked tables, one per nanometre.
+pub fn table_wavelengths() -> impl Iterator<Item = f32> {
+    (0..CIE_Y.len()).map(|i| LAMBDA_MIN_NM + i as f32)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn d65_is_white_with_luminance_one() {
+        let xyz: DVec3 = table_wavelengths()
+            .map(|l| (cmf(l) * d65(l)).as_dvec3())
+            .sum();
+        assert!((xyz.y - 1.0).abs() < 1e-4, "Y = {}", xyz.y);
+        let rgb = xyz_to_linear_rec709(xyz);
+        assert!((rgb - DVec3::ONE).abs().max_element() < 1e-4, "{rgb}");
+    }
+
+    #[test]
+    fn y_bar_peaks_at_555_nm() {
+        assert!((cmf(555.0).y - 1.0).abs() < 1e-3);
+        assert_eq!(cmf(200.0), Vec3::ZERO);
+    }
+}
