@@ -16,7 +16,12 @@ fn read_csv(path: &Path) -> Vec<Vec<f64>> {
         .skip(1)
         .map(|line| {
             line.split(',')
-                .map(|field| field.trim().parse().unwrap_or_else(|e| panic!("{}: {line}: {e}", path.display())))
+                .map(|field| {
+                    field
+                        .trim()
+                        .parse()
+                        .unwrap_or_else(|e| panic!("{}: {line}: {e}", path.display()))
+                })
                 .collect()
         })
         .collect()
@@ -28,7 +33,9 @@ fn resample(rows: &[Vec<f64>], column: usize) -> Vec<f64> {
     (0..count)
         .map(|i| {
             let lambda = LAMBDA_MIN_NM + i as f64;
-            let k = rows.partition_point(|row| row[0] <= lambda).clamp(1, rows.len() - 1);
+            let k = rows
+                .partition_point(|row| row[0] <= lambda)
+                .clamp(1, rows.len() - 1);
             let (a, b) = (&rows[k - 1], &rows[k]);
             let t = ((lambda - a[0]) / (b[0] - a[0])).clamp(0.0, 1.0);
             a[column] + t * (b[column] - a[column])
@@ -45,7 +52,11 @@ const XYZ_TO_REC709: [[f64; 3]; 3] = [
 
 fn rust_array(name: &str, values: &[f64]) -> String {
     let body: Vec<String> = values.iter().map(|v| format!("{v:e}")).collect();
-    format!("pub const {name}: [f32; {}] = [{}];\n", values.len(), body.join(", "))
+    format!(
+        "/// Baked from spectra/ at 1 nm.\npub const {name}: [f32; {}] = [{}];\n",
+        values.len(),
+        body.join(", ")
+    )
 }
 
 fn main() {
@@ -53,7 +64,7 @@ fn main() {
     let cmf = read_csv(&dir.join("cie1931_2deg.csv"));
     let d65 = read_csv(&dir.join("d65.csv"));
     let mut out = format!(
-        "pub const LAMBDA_MIN_NM: f32 = {LAMBDA_MIN_NM:?};\npub const LAMBDA_MAX_NM: f32 = {LAMBDA_MAX_NM:?};\n"
+        "/// First wavelength of the tables.\npub const LAMBDA_MIN_NM: f32 = {LAMBDA_MIN_NM:?};\n/// Last wavelength of the tables.\npub const LAMBDA_MAX_NM: f32 = {LAMBDA_MAX_NM:?};\n"
     );
     let (x, y, z) = (resample(&cmf, 1), resample(&cmf, 2), resample(&cmf, 3));
     let d65 = resample(&d65, 1);
@@ -62,10 +73,14 @@ fn main() {
     let d65: Vec<f64> = d65.iter().map(|s| s / luminance).collect();
     let white = [0, 1, 2].map(|row| {
         let xyz: [f64; 3] = [&x, &y, &z].map(|bar| d65.iter().zip(bar).map(|(s, b)| s * b).sum());
-        (0..3).map(|col| XYZ_TO_REC709[row][col] * xyz[col]).sum::<f64>()
+        (0..3)
+            .map(|col| XYZ_TO_REC709[row][col] * xyz[col])
+            .sum::<f64>()
     });
     // Scale each row so that the tabulated D65 maps to exactly (1, 1, 1) (von Kries in RGB).
-    let matrix: Vec<f64> = (0..9).map(|k| XYZ_TO_REC709[k / 3][k % 3] / white[k / 3]).collect();
+    let matrix: Vec<f64> = (0..9)
+        .map(|k| XYZ_TO_REC709[k / 3][k % 3] / white[k / 3])
+        .collect();
     out += &rust_array("CIE_X", &x);
     out += &rust_array("CIE_Y", &y);
     out += &rust_array("CIE_Z", &z);

@@ -13,7 +13,10 @@
 use glam::{Vec2, Vec3};
 use std::f32::consts::PI;
 
-use crate::sampling::{basis, square_to_cone, square_to_cosine_hemisphere, square_to_disc, square_to_sphere, square_to_triangle};
+use crate::sampling::{
+    basis, square_to_cone, square_to_cosine_hemisphere, square_to_disc, square_to_sphere,
+    square_to_triangle,
+};
 use crate::spectrum::{d65, RgbSpectrum};
 
 /// The scene's bounding sphere, where distant lights start their photons.
@@ -146,74 +149,147 @@ impl Light {
     pub fn power(&self) -> f64 {
         let power = match self {
             Light::Point { intensity, .. } => 4.0 * PI as f64 * intensity.luminance(),
-            Light::Spot { intensity, cos_outer, .. } => {
-                2.0 * PI as f64 * (1.0 - f64::from(*cos_outer)) * intensity.luminance()
-            }
-            Light::Sun { irradiance, sphere, .. } => {
-                irradiance.luminance() * f64::from(PI * sphere.radius * sphere.radius)
-            }
-            Light::Triangle { corners, radiance, both_sides } => {
+            Light::Spot {
+                intensity,
+                cos_outer,
+                ..
+            } => 2.0 * PI as f64 * (1.0 - f64::from(*cos_outer)) * intensity.luminance(),
+            Light::Sun {
+                irradiance, sphere, ..
+            } => irradiance.luminance() * f64::from(PI * sphere.radius * sphere.radius),
+            Light::Triangle {
+                corners,
+                radiance,
+                both_sides,
+            } => {
                 let sides = if *both_sides { 2.0 } else { 1.0 };
                 sides * radiance.luminance() * f64::from(PI * triangle_area(corners))
             }
             Light::World(world) => {
                 let r = f64::from(world.sphere.radius);
-                world.radiance.luminance() * 4.0 * std::f64::consts::PI * std::f64::consts::PI * r * r
+                world.radiance.luminance()
+                    * 4.0
+                    * std::f64::consts::PI
+                    * std::f64::consts::PI
+                    * r
+                    * r
             }
         };
-        if power.is_finite() { power.max(0.0) } else { 0.0 }
+        if power.is_finite() {
+            power.max(0.0)
+        } else {
+            0.0
+        }
     }
 
     /// Samples light arriving at `p` (for next-event estimation); `None` when none arrives.
     pub fn sample_incident(&self, p: Vec3, u: Vec2, lambda_nm: f32) -> Option<LightSample> {
         match self {
-            Light::Point { position, intensity } => {
+            Light::Point {
+                position,
+                intensity,
+            } => {
                 let (wi, distance) = direction_and_distance(p, *position)?;
                 let radiance_over_pdf = spectral(intensity, lambda_nm) / (distance * distance);
-                Some(LightSample { wi, distance, radiance_over_pdf })
+                Some(LightSample {
+                    wi,
+                    distance,
+                    radiance_over_pdf,
+                })
             }
-            Light::Spot { position, axis, intensity, cos_inner, cos_outer } => {
+            Light::Spot {
+                position,
+                axis,
+                intensity,
+                cos_inner,
+                cos_outer,
+            } => {
                 let (wi, distance) = direction_and_distance(p, *position)?;
                 let falloff = spot_falloff(-wi.dot(*axis), *cos_inner, *cos_outer);
-                let radiance_over_pdf = spectral(intensity, lambda_nm) * falloff / (distance * distance);
-                (falloff > 0.0).then_some(LightSample { wi, distance, radiance_over_pdf })
+                let radiance_over_pdf =
+                    spectral(intensity, lambda_nm) * falloff / (distance * distance);
+                (falloff > 0.0).then_some(LightSample {
+                    wi,
+                    distance,
+                    radiance_over_pdf,
+                })
             }
-            Light::Sun { direction, irradiance, cos_max, .. } => {
+            Light::Sun {
+                direction,
+                irradiance,
+                cos_max,
+                ..
+            } => {
                 let (t, b) = basis(-*direction);
                 let local = square_to_cone(u, *cos_max);
                 let wi = (t * local.x + b * local.y - *direction * local.z).normalize();
                 let radiance_over_pdf = spectral(irradiance, lambda_nm);
-                Some(LightSample { wi, distance: f32::INFINITY, radiance_over_pdf })
+                Some(LightSample {
+                    wi,
+                    distance: f32::INFINITY,
+                    radiance_over_pdf,
+                })
             }
-            Light::Triangle { corners, radiance, both_sides } => {
+            Light::Triangle {
+                corners,
+                radiance,
+                both_sides,
+            } => {
                 let q = point_in_triangle(corners, u);
                 let (wi, distance) = direction_and_distance(p, q)?;
                 let cos_light = -triangle_normal(corners).dot(wi);
-                let cos_light = if *both_sides { cos_light.abs() } else { cos_light };
+                let cos_light = if *both_sides {
+                    cos_light.abs()
+                } else {
+                    cos_light
+                };
                 if cos_light <= 0.0 {
                     return None;
                 }
                 let area = triangle_area(corners);
-                let radiance_over_pdf = spectral(radiance, lambda_nm) * area * cos_light / (distance * distance);
-                Some(LightSample { wi, distance, radiance_over_pdf })
+                let radiance_over_pdf =
+                    spectral(radiance, lambda_nm) * area * cos_light / (distance * distance);
+                Some(LightSample {
+                    wi,
+                    distance,
+                    radiance_over_pdf,
+                })
             }
             Light::World(world) => {
                 let wi = square_to_sphere(u);
                 let radiance_over_pdf = world.radiance(-wi, lambda_nm) * 4.0 * PI;
-                Some(LightSample { wi, distance: f32::INFINITY, radiance_over_pdf })
+                Some(LightSample {
+                    wi,
+                    distance: f32::INFINITY,
+                    radiance_over_pdf,
+                })
             }
         }
     }
 
     /// Samples a photon leaving the light at `lambda_nm`.
-    pub fn emit_photon(&self, u_position: Vec2, u_direction: Vec2, lambda_nm: f32) -> Option<EmittedPhoton> {
+    pub fn emit_photon(
+        &self,
+        u_position: Vec2,
+        u_direction: Vec2,
+        lambda_nm: f32,
+    ) -> Option<EmittedPhoton> {
         let photon = match self {
-            Light::Point { position, intensity } => EmittedPhoton {
+            Light::Point {
+                position,
+                intensity,
+            } => EmittedPhoton {
                 origin: *position,
                 direction: square_to_sphere(u_direction),
                 flux: spectral(intensity, lambda_nm) * 4.0 * PI,
             },
-            Light::Spot { position, axis, intensity, cos_inner, cos_outer } => {
+            Light::Spot {
+                position,
+                axis,
+                intensity,
+                cos_inner,
+                cos_outer,
+            } => {
                 let (t, b) = basis(*axis);
                 let local = square_to_cone(u_direction, *cos_outer);
                 let falloff = spot_falloff(local.z, *cos_inner, *cos_outer);
@@ -224,7 +300,12 @@ impl Light {
                     flux: spectral(intensity, lambda_nm) * falloff * solid_angle,
                 }
             }
-            Light::Sun { direction, irradiance, cos_max, sphere } => {
+            Light::Sun {
+                direction,
+                irradiance,
+                cos_max,
+                sphere,
+            } => {
                 let (t, b) = basis(*direction);
                 let local = square_to_cone(u_direction, *cos_max);
                 let direction = (t * local.x + b * local.y + *direction * local.z).normalize();
@@ -234,7 +315,11 @@ impl Light {
                     flux: spectral(irradiance, lambda_nm) * PI * sphere.radius * sphere.radius,
                 }
             }
-            Light::Triangle { corners, radiance, both_sides } => {
+            Light::Triangle {
+                corners,
+                radiance,
+                both_sides,
+            } => {
                 let mut n = triangle_normal(corners);
                 let mut u = u_direction;
                 let mut sides = 1.0;
@@ -285,16 +370,32 @@ mod tests {
         // A 2 x 2 square emitter (two triangles) at height 1 above a point: irradiance is pi L
         // times the form factor 4 * 2 / (2 pi) * atan(1 / sqrt 2) / sqrt 2 (parallel rectangles).
         let s = 1.0;
-        let c = [Vec3::new(-s, -s, 1.0), Vec3::new(s, -s, 1.0), Vec3::new(s, s, 1.0), Vec3::new(-s, s, 1.0)];
+        let c = [
+            Vec3::new(-s, -s, 1.0),
+            Vec3::new(s, -s, 1.0),
+            Vec3::new(s, s, 1.0),
+            Vec3::new(-s, s, 1.0),
+        ];
         let lights = [
-            Light::Triangle { corners: [c[0], c[2], c[1]], radiance: RgbSpectrum::constant(1.0), both_sides: false },
-            Light::Triangle { corners: [c[0], c[3], c[2]], radiance: RgbSpectrum::constant(1.0), both_sides: false },
+            Light::Triangle {
+                corners: [c[0], c[2], c[1]],
+                radiance: RgbSpectrum::constant(1.0),
+                both_sides: false,
+            },
+            Light::Triangle {
+                corners: [c[0], c[3], c[2]],
+                radiance: RgbSpectrum::constant(1.0),
+                both_sides: false,
+            },
         ];
         let n = 40000;
         let mut irradiance = 0.0;
         for light in &lights {
             for i in 0..n {
-                let u = Vec2::new((i as f32 + 0.5) / n as f32, ((i * 7919) % n) as f32 / n as f32);
+                let u = Vec2::new(
+                    (i as f32 + 0.5) / n as f32,
+                    ((i * 7919) % n) as f32 / n as f32,
+                );
                 if let Some(s) = light.sample_incident(Vec3::ZERO, u, 555.0) {
                     irradiance += s.radiance_over_pdf * s.wi.z.max(0.0) / n as f32;
                 }
@@ -302,6 +403,9 @@ mod tests {
         }
         let form_factor = 4.0 / PI * (0.5f32.sqrt()).atan() * 0.5f32.sqrt();
         let expected = PI * form_factor * d65(555.0);
-        assert!((irradiance / expected - 1.0).abs() < 0.02, "{irradiance} vs {expected}");
+        assert!(
+            (irradiance / expected - 1.0).abs() < 0.02,
+            "{irradiance} vs {expected}"
+        );
     }
 }

@@ -1,1 +1,4 @@
-fn main(){}
+//! The `caustic` command.
+fn main() -> std::process::ExitCode {
+    caustic::cli::main()
+}

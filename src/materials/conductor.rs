@@ -15,7 +15,11 @@ pub fn reflect(wo: Vec3, n: Vec3) -> Vec3 {
 pub fn sample_smooth(f0: f32, n: Vec3, wo: Vec3) -> Option<BsdfSample> {
     let n = face_toward(n, wo);
     let weight = microfacet::schlick(f0, n.dot(wo));
-    Some(BsdfSample { wi: reflect(wo, n), weight, is_delta: true })
+    Some(BsdfSample {
+        wi: reflect(wo, n),
+        weight,
+        is_delta: true,
+    })
 }
 
 /// `wo` and `wi` in the frame of `n` (flipped to the side of `wo`).
@@ -53,5 +57,9 @@ pub fn sample_rough(f0: f32, alpha: f32, n: Vec3, wo: Vec3, u: Vec2) -> Option<B
         * microfacet::masking_shadowing(alpha, wo_local, wi_local)
         / microfacet::masking(alpha, wo_local);
     let wi = t * wi_local.x + b * wi_local.y + n * wi_local.z;
-    Some(BsdfSample { wi: wi.normalize(), weight, is_delta: false })
+    Some(BsdfSample {
+        wi: wi.normalize(),
+        weight,
+        is_delta: false,
+    })
 }

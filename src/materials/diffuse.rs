@@ -21,5 +21,9 @@ pub fn sample(albedo: f32, n: Vec3, wo: Vec3, u: Vec2) -> Option<BsdfSample> {
     let (t, b) = basis(n);
     let local = square_to_cosine_hemisphere(u);
     let wi = (t * local.x + b * local.y + n * local.z).normalize();
-    Some(BsdfSample { wi, weight: albedo, is_delta: false })
+    Some(BsdfSample {
+        wi,
+        weight: albedo,
+        is_delta: false,
+    })
 }

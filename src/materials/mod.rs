@@ -11,26 +11,27 @@ mod conductor;
 mod dielectric;
 mod diffuse;
 mod microfacet;
+mod texture;
+
+use std::sync::Arc;
 
 use glam::{Vec2, Vec3};
 
 use crate::spectrum::{d65, RgbSpectrum};
 
 pub use dielectric::fresnel_dielectric;
+pub use texture::Texture;
 
 /// Roughness below this is treated as perfectly smooth (a delta BSDF).
 pub const SMOOTH_ROUGHNESS: f32 = 0.02;
 
-/// A material's base colour: a constant spectrum or an index into the scene's textures.
+/// A material's base colour: a constant spectrum or a texture (with the factor baked in).
 #[derive(Clone, Debug)]
 pub enum BaseColour {
     /// The same reflectance everywhere.
     Constant(RgbSpectrum),
-    /// A texture (index into `Scene::textures`) times a factor.
-    Texture {
-        /// Index into the scene's texture list.
-        texture: usize,
-    },
+    /// A texture looked up at the surface's texture coordinates.
+    Texture(Arc<Texture>),
 }
 
 /// A surface's material: glTF metallic-roughness with transmission, IOR and emission.
@@ -69,6 +70,14 @@ impl Material {
         }
     }
 
+    /// The base colour's reflectance at texture coordinate `uv` and `lambda_nm`.
+    pub fn reflectance(&self, uv: Vec2, lambda_nm: f32) -> f32 {
+        match &self.base_colour {
+            BaseColour::Constant(spectrum) => spectrum.eval(lambda_nm),
+            BaseColour::Texture(texture) => texture.eval(uv, lambda_nm),
+        }
+    }
+
     /// The emitted spectral radiance at `lambda_nm` leaving toward `wo` from a face of normal `ng`.
     pub fn emitted(&self, lambda_nm: f32, ng: Vec3, wo: Vec3) -> f32 {
         match &self.emission {
@@ -91,12 +100,17 @@ impl Material {
             if self.roughness < SMOOTH_ROUGHNESS {
                 return Bsdf::Conductor { f0: reflectance };
             }
-            return Bsdf::RoughConductor { f0: reflectance, alpha };
+            return Bsdf::RoughConductor {
+                f0: reflectance,
+                alpha,
+            };
         }
         if self.emission.is_some() && reflectance == 0.0 {
             return Bsdf::Black;
         }
-        Bsdf::Diffuse { albedo: reflectance }
+        Bsdf::Diffuse {
+            albedo: reflectance,
+        }
     }
 }
 
@@ -165,7 +179,14 @@ impl Bsdf {
     }
 
     /// Samples `wi` for `wo` at a surface of shading normal `n` and geometric normal `ng`.
-    pub fn sample(&self, frame: ShadingFrame, wo: Vec3, u: Vec2, u_lobe: f32, mode: Transport) -> Option<BsdfSample> {
+    pub fn sample(
+        &self,
+        frame: ShadingFrame,
+        wo: Vec3,
+        u: Vec2,
+        u_lobe: f32,
+        mode: Transport,
+    ) -> Option<BsdfSample> {
         let ShadingFrame { n, ng } = frame;
         match *self {
             Bsdf::Diffuse { albedo } => diffuse::sample(albedo, n, wo, u),

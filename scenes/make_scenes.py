@@ -1,0 +1,160 @@
+"""Builds the bundled scenes in Blender (bpy) and exports them with Blender's own glTF exporter.
+
+Run from the repository root (needs `pip install bpy==5.0.1`, CPython 3.11, x86_64):
+
+    python scenes/make_scenes.py
+
+Writes scenes/<name>.gltf and scenes/<name>.bin:
+- cornell_glass: a Cornell box with a glass sphere lit by a small area light (the demo scene:
+  the sphere focuses a caustic onto the floor);
+- furnace: a closed cube whose walls are diffuse (albedo 0.5) and emit radiance 1, seen from
+  inside (the analytic answer is Le / (1 - a) = 2 everywhere);
+- spot_glass: a spot light shining through a glass sphere onto a diffuse floor.
+
+Blender's exporter drops area lights and the render resolution, so they travel as `caustic`
+custom properties, which the exporter writes as glTF extras (see docs/extras.md).
+"""
+import math
+import pathlib
+
+import bpy
+
+HERE = pathlib.Path(__file__).resolve().parent
+
+
+def reset():
+    bpy.ops.wm.read_factory_settings(use_empty=True)
+
+
+def material(name, colour=(0.8, 0.8, 0.8), roughness=1.0, transmission=0.0, ior=1.5,
+             emission=None, emission_strength=1.0):
+    m = bpy.data.materials.new(name)
+    bsdf = m.node_tree.nodes["Principled BSDF"] if m.node_tree else None
+    if bsdf is None:
+        m.use_nodes = True
+        bsdf = m.node_tree.nodes["Principled BSDF"]
+    bsdf.inputs["Base Color"].default_value = (*colour, 1.0)
+    bsdf.inputs["Roughness"].default_value = roughness
+    bsdf.inputs["Transmission Weight"].default_value = transmission
+    bsdf.inputs["IOR"].default_value = ior
+    # No specular layer on diffuse walls: the exporter writes KHR_materials_specular factor 0.
+    bsdf.inputs["Specular IOR Level"].default_value = 0.5 if transmission > 0 else 0.0
+    if emission is not None:
+        bsdf.inputs["Emission Color"].default_value = (*emission, 1.0)
+        bsdf.inputs["Emission Strength"].default_value = emission_strength
+    return m
+
+
+def plane(name, size, location, rotation, mat):
+    bpy.ops.mesh.primitive_plane_add(size=size, location=location, rotation=rotation)
+    obj = bpy.context.object
+    obj.name = name
+    obj.data.materials.append(mat)
+    return obj
+
+
+def glass_sphere(location, radius, mat):
+    bpy.ops.mesh.primitive_uv_sphere_add(segments=96, ring_count=48, radius=radius, location=location)
+    obj = bpy.context.object
+    obj.name = "GlassSphere"
+    bpy.ops.object.shade_smooth()
+    obj.data.materials.append(mat)
+    return obj
+
+
+def camera(location, look_at, lens_mm=35.0):
+    bpy.ops.object.camera_add(location=location)
+    cam = bpy.context.object
+    direction = [t - l for t, l in zip(look_at, location)]
+    import mathutils
+    cam.rotation_euler = mathutils.Vector(direction).to_track_quat("-Z", "Y").to_euler()
+    cam.data.lens = lens_mm
+    bpy.context.scene.camera = cam
+    return cam
+
+
+def area_light(name, location, size, power):
+    bpy.ops.object.light_add(type="AREA", location=location)
+    light = bpy.context.object
+    light.name = name
+    light.data.shape = "SQUARE"
+    light.data.size = size
+    light.data.energy = power
+    light["caustic"] = {"area_light": {"shape": "SQUARE", "size": size, "power": power, "color": [1.0, 1.0, 1.0]}}
+    return light
+
+
+def set_resolution(width, height):
+    scene = bpy.context.scene
+    scene.render.resolution_x = width
+    scene.render.resolution_y = height
+    scene["caustic"] = {"resolution": [width, height]}
+
+
+def export(name):
+    bpy.ops.export_scene.gltf(
+        filepath=str(HERE / f"{name}.gltf"),
+        export_format="GLTF_SEPARATE",
+        export_cameras=True,
+        export_lights=True,
+        export_extras=True,
+        export_apply=True,
+        export_animations=False,
+        export_yup=True,
+    )
+
+
+def cornell_box(white, red, green):
+    plane("Floor", 2, (0, 0, 0), (0, 0, 0), white)
+    plane("Ceiling", 2, (0, 0, 2), (math.pi, 0, 0), white)
+    plane("BackWall", 2, (0, 1, 1), (math.pi / 2, 0, 0), white)
+    plane("LeftWall", 2, (-1, 0, 1), (0, math.pi / 2, 0), red)
+    plane("RightWall", 2, (1, 0, 1), (0, -math.pi / 2, 0), green)
+
+
+def make_cornell_glass():
+    reset()
+    white = material("White", (0.75, 0.75, 0.75))
+    red = material("Red", (0.63, 0.065, 0.05))
+    green = material("Green", (0.14, 0.45, 0.091))
+    glass = material("Glass", (1.0, 1.0, 1.0), roughness=0.0, transmission=1.0, ior=1.5)
+    cornell_box(white, red, green)
+    glass_sphere((0.3, -0.3, 0.45), 0.45, glass)
+    area_light("CeilingLight", (-0.3, 0.4, 1.98), 0.5, 25.0)
+    camera((0, -3.9, 1.0), (0, 0, 1.0))
+    set_resolution(480, 360)
+    export("cornell_glass")
+
+
+def make_furnace():
+    reset()
+    wall = material("EmissiveGrey", (0.5, 0.5, 0.5), emission=(1.0, 1.0, 1.0), emission_strength=1.0)
+    bpy.ops.mesh.primitive_cube_add(size=2, location=(0, 0, 0))
+    cube = bpy.context.object
+    cube.name = "Enclosure"
+    cube.data.materials.append(wall)
+    camera((0, 0, 0), (0, 1, 0.2), lens_mm=20)
+    set_resolution(64, 64)
+    export("furnace")
+
+
+def make_spot_glass():
+    reset()
+    floor = material("Floor", (0.7, 0.7, 0.7))
+    glass = material("Glass", (1.0, 1.0, 1.0), roughness=0.0, transmission=1.0, ior=1.5)
+    plane("Floor", 6, (0, 0, 0), (0, 0, 0), floor)
+    glass_sphere((0, 0, 1.0), 0.5, glass)
+    bpy.ops.object.light_add(type="SPOT", location=(0, 0, 3.0))
+    spot = bpy.context.object
+    spot.data.energy = 500.0
+    spot.data.spot_size = math.radians(40)
+    spot.data.spot_blend = 0.1
+    camera((0, -4.0, 3.0), (0, 0, 0.3))
+    set_resolution(320, 240)
+    export("spot_glass")
+
+
+if __name__ == "__main__":
+    make_cornell_glass()
+    make_furnace()
+    make_spot_glass()

@@ -1,0 +1,167 @@
+//! The command line: arguments to settings, errors to one message and a non-zero exit.
+
+use std::path::PathBuf;
+
+use clap::{Args, Parser, Subcommand};
+
+use crate::frames::{self, ProgressStyle, RenderSettings};
+
+/// The bundled demo scene, used when no scene is given.
+pub const DEMO_SCENE: &str = concat!(env!("CARGO_MANIFEST_DIR"), "/scenes/cornell_glass.gltf");
+
+/// Caustic: spectral progressive photon mapping for glTF scenes.
+#[derive(Parser, Debug)]
+#[command(name = "caustic", version, about, long_about = None)]
+pub struct Cli {
+    #[command(subcommand)]
+    command: Command,
+}
+
+#[derive(Subcommand, Debug)]
+enum Command {
+    /// Render a glTF scene to OUT/frame_0001.exr.
+    Render(RenderArgs),
+    /// Measure passes, photon paths and rays per second, with 1 and 2 threads, and peak memory.
+    Bench(BenchArgs),
+}
+
+/// Flags of `caustic render`.
+#[derive(Args, Debug)]
+pub struct RenderArgs {
+    /// The glTF 2.0 scene (.gltf or .glb); the bundled demo scene when omitted.
+    scene: Option<PathBuf>,
+    /// Output folder for frame_NNNN.exr.
+    #[arg(short, long = "out", default_value = "renders")]
+    out: PathBuf,
+    /// Number of passes (default 64 unless --time-budget is given).
+    #[arg(long, value_parser = clap::value_parser!(u64).range(1..))]
+    passes: Option<u64>,
+    /// Stop after the pass that ends past this many seconds.
+    #[arg(long, value_parser = positive_f64)]
+    time_budget: Option<f64>,
+    /// Photon paths per pass (default: one per pixel).
+    #[arg(long, value_parser = clap::value_parser!(u64).range(1..))]
+    photons: Option<u64>,
+    /// Radius reduction alpha of Knaus & Zwicker, in (0, 1).
+    #[arg(long, default_value_t = 2.0 / 3.0, value_parser = unit_interval)]
+    alpha: f64,
+    /// First-pass gather radius in scene units (default: 1% of the scene's bounding diameter).
+    #[arg(long, value_parser = positive_f64)]
+    radius: Option<f64>,
+    /// Image size WxH (default: the scene's, else 640 wide at the camera's aspect).
+    #[arg(long, value_parser = parse_resolution)]
+    resolution: Option<[u32; 2]>,
+    /// Random seed: the same seed gives the same image with any thread count.
+    #[arg(long, default_value_t = 1)]
+    seed: u64,
+    /// Worker threads (default: all cores).
+    #[arg(long, value_parser = clap::value_parser!(u64).range(1..=1024))]
+    threads: Option<u64>,
+    /// Progress display: a bar on the terminal, JSON lines on stdout, or none.
+    #[arg(long, value_enum, default_value_t = ProgressStyle::Bar)]
+    progress: ProgressStyle,
+}
+
+/// Flags of `caustic bench`.
+#[derive(Args, Debug)]
+pub struct BenchArgs {
+    /// The scene (default: the demo scene).
+    scene: Option<PathBuf>,
+    /// Image size WxH.
+    #[arg(long, default_value = "640x360", value_parser = parse_resolution)]
+    resolution: [u32; 2],
+    /// Passes per measurement.
+    #[arg(long, default_value_t = 8, value_parser = clap::value_parser!(u64).range(1..))]
+    passes: u64,
+}
+
+fn positive_f64(s: &str) -> Result<f64, String> {
+    match s.parse::<f64>() {
+        Ok(v) if v > 0.0 && v.is_finite() => Ok(v),
+        _ => Err(format!("expected a positive number, got '{s}'")),
+    }
+}
+
+fn unit_interval(s: &str) -> Result<f64, String> {
+    match s.parse::<f64>() {
+        Ok(v) if v > 0.0 && v < 1.0 => Ok(v),
+        _ => Err(format!(
+            "expected a number strictly between 0 and 1, got '{s}'"
+        )),
+    }
+}
+
+fn parse_resolution(s: &str) -> Result<[u32; 2], String> {
+    let parsed = s
+        .split_once(['x', 'X'])
+        .and_then(|(w, h)| Some([w.parse::<u32>().ok()?, h.parse::<u32>().ok()?]));
+    match parsed {
+        Some([w, h]) if (1..=65536).contains(&w) && (1..=65536).contains(&h) => Ok([w, h]),
+        _ => Err(format!(
+            "expected WIDTHxHEIGHT with each between 1 and 65536, e.g. 640x360; got '{s}'"
+        )),
+    }
+}
+
+impl RenderArgs {
+    fn settings(&self) -> RenderSettings {
+        RenderSettings {
+            scene: self
+                .scene
+                .clone()
+                .unwrap_or_else(|| PathBuf::from(DEMO_SCENE)),
+            out_dir: self.out.clone(),
+            passes: self.passes,
+            time_budget_s: self.time_budget,
+            photons: self.photons.map(|n| n as usize),
+            alpha: self.alpha,
+            radius: self.radius,
+            resolution: self.resolution,
+            seed: self.seed,
+            progress: self.progress,
+        }
+    }
+}
+
+/// A thread pool of `threads` workers (all cores when `None`).
+fn thread_pool(threads: Option<u64>) -> Result<rayon::ThreadPool, String> {
+    rayon::ThreadPoolBuilder::new()
+        .num_threads(threads.unwrap_or(0) as usize)
+        .build()
+        .map_err(|e| format!("cannot start worker threads: {e}"))
+}
+
+/// Parses the arguments and runs the command; `Err` is the message for stderr.
+pub fn run(cli: Cli) -> Result<(), String> {
+    match cli.command {
+        Command::Render(args) => {
+            let settings = args.settings();
+            let report = thread_pool(args.threads)?.install(|| frames::render(&settings))?;
+            if settings.progress != ProgressStyle::Json {
+                eprintln!(
+                    "caustic: wrote {} ({} passes, {:.1} s)",
+                    report.path.display(),
+                    report.passes,
+                    report.elapsed_s
+                );
+            }
+            Ok(())
+        }
+        Command::Bench(args) => {
+            let scene = args.scene.unwrap_or_else(|| PathBuf::from(DEMO_SCENE));
+            crate::bench::run(&scene, args.resolution, args.passes)
+        }
+    }
+}
+
+/// The program: parse, run, and exit non-zero with one message on failure.
+pub fn main() -> std::process::ExitCode {
+    let cli = Cli::parse();
+    match run(cli) {
+        Ok(()) => std::process::ExitCode::SUCCESS,
+        Err(message) => {
+            eprintln!("caustic: error: {message}");
+            std::process::ExitCode::FAILURE
+        }
+    }
+}

@@ -1,0 +1,114 @@
+//! The film (DESIGN.md step 5): per-pixel sums over passes, and the EXR they become.
+//!
+//! A pixel keeps only sums: of the pass estimates converted to XYZ (`L cmf(lambda) / p(lambda)`),
+//! of the square of their luminance, of the Laplacian term's luminance, and the pass count.
+//! Two films of disjoint pass ranges therefore merge exactly by adding. The image is the mean,
+//! XYZ to linear Rec.709, written as one part with `Combined.R/G/B/A` (what Blender's render result
+//! reads), to a temporary file that is renamed into place when complete.
+
+use std::path::Path;
+
+use exr::prelude::*;
+use glam::DVec3;
+
+use crate::spectrum::{cmf, xyz_to_linear_rec709};
+
+/// One pixel's running sums over passes.
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
+pub struct PixelSums {
+    /// Sum of the XYZ estimates.
+    pub xyz: DVec3,
+    /// Sum of the squared luminance estimates.
+    pub y_squared: f64,
+    /// Sum of the luminance of the Laplacian term.
+    pub laplacian_y: f64,
+    /// Number of passes summed.
+    pub passes: u64,
+}
+
+/// The image being rendered: sums per pixel, row-major from the top-left.
+#[derive(Clone, Debug)]
+pub struct Film {
+    /// Width in pixels.
+    pub width: u32,
+    /// Height in pixels.
+    pub height: u32,
+    /// Per-pixel sums.
+    pub pixels: Vec<PixelSums>,
+}
+
+impl Film {
+    /// An empty film.
+    pub fn new(width: u32, height: u32) -> Self {
+        Film {
+            width,
+            height,
+            pixels: vec![PixelSums::default(); (width * height) as usize],
+        }
+    }
+
+    /// Adds one pass: `radiance[i]` and `laplacian[i]` at `lambda_nm`, sampled with density `pdf`.
+    pub fn add_pass(
+        &mut self,
+        lambda_nm: f32,
+        pdf: f32,
+        estimates: impl Iterator<Item = (f32, f32)>,
+    ) {
+        let weight = (cmf(lambda_nm) / pdf).as_dvec3();
+        for (sums, (radiance, laplacian)) in self.pixels.iter_mut().zip(estimates) {
+            let xyz = weight * f64::from(radiance);
+            sums.xyz += xyz;
+            sums.y_squared += xyz.y * xyz.y;
+            sums.laplacian_y += weight.y * f64::from(laplacian);
+            sums.passes += 1;
+        }
+    }
+
+    /// The mean linear Rec.709 colour of every pixel.
+    pub fn rgb(&self) -> Vec<DVec3> {
+        self.pixels
+            .iter()
+            .map(|s| {
+                if s.passes == 0 {
+                    DVec3::ZERO
+                } else {
+                    xyz_to_linear_rec709(s.xyz / s.passes as f64)
+                }
+            })
+            .collect()
+    }
+
+    /// Writes the image to `path` through a temporary file beside it.
+    pub fn write_exr(&self, path: &Path) -> std::result::Result<(), String> {
+        let rgb = self.rgb();
+        let (w, h) = (self.width as usize, self.height as usize);
+        let channel =
+            |name: &str, values: Vec<f32>| AnyChannel::new(name, FlatSamples::F32(values));
+        let component = |k: usize| rgb.iter().map(|c| c[k] as f32).collect::<Vec<f32>>();
+        let channels = AnyChannels::sort(SmallVec::from_vec(vec![
+            channel("Combined.R", component(0)),
+            channel("Combined.G", component(1)),
+            channel("Combined.B", component(2)),
+            channel("Combined.A", vec![1.0; w * h]),
+        ]));
+        let layer = Layer::new(
+            (w, h),
+            LayerAttributes::default(),
+            Encoding::SMALL_LOSSLESS,
+            channels,
+        );
+        let image = Image::from_layer(layer);
+        let temporary = path.with_extension("exr.partial");
+        image
+            .write()
+            .to_file(&temporary)
+            .map_err(|e| format!("cannot write {}: {e}", temporary.display()))?;
+        std::fs::rename(&temporary, path).map_err(|e| {
+            format!(
+                "cannot rename {} to {}: {e}",
+                temporary.display(),
+                path.display()
+            )
+        })
+    }
+}

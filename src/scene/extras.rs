@@ -1,0 +1,102 @@
+//! The `caustic` extras schema: what Blender's glTF exporter drops, carried in glTF `extras`.
+//!
+//! Every entry lives under one `caustic` key, so other tools' extras are left alone; unknown keys
+//! inside it are errors (a typo must not be silently ignored). The schema is documented for users
+//! in `docs/extras.md`; keep the two in step.
+//!
+//! - scene: `{"caustic": {"resolution": [w, h], "world": World}}`
+//! - node: `{"caustic": {"area_light": AreaLight}}` on an area light's (empty) node, and
+//!   `{"caustic": {"sun_angle_deg": a}}` on a sun's node.
+
+use serde::Deserialize;
+
+/// The `caustic` entry of the scene's extras.
+#[derive(Debug, Default, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct SceneExtras {
+    /// Render resolution in pixels, width and height.
+    pub resolution: Option<[u32; 2]>,
+    /// The world's light.
+    pub world: Option<WorldExtras>,
+}
+
+/// The world: a uniform colour, or an equirectangular image, times a strength.
+#[derive(Debug, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct WorldExtras {
+    /// Linear Rec.709 colour (default white).
+    #[serde(default = "white")]
+    pub color: [f32; 3],
+    /// Radiance scale, W / (m^2 sr) for a white colour (default 1).
+    #[serde(default = "one")]
+    pub strength: f32,
+    /// Path of an equirectangular `.hdr` or `.exr` image, relative to the glTF file.
+    pub image: Option<String>,
+    /// Rotation of the image about the up axis, in degrees.
+    #[serde(default)]
+    pub rotation_deg: f32,
+}
+
+/// The `caustic` entry of a node's extras.
+#[derive(Debug, Default, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct NodeExtras {
+    /// The node is an area light.
+    pub area_light: Option<AreaLightExtras>,
+    /// The angular diameter of the node's sun light, in degrees (soft shadows).
+    pub sun_angle_deg: Option<f32>,
+}
+
+/// The shapes of Blender's area lights.
+#[derive(Clone, Copy, Debug, Deserialize, PartialEq, Eq)]
+#[serde(rename_all = "UPPERCASE")]
+pub enum AreaShape {
+    /// `size` by `size`.
+    Square,
+    /// `size` by `size_y`.
+    Rectangle,
+    /// A disc of diameter `size`.
+    Disk,
+    /// An ellipse of diameters `size` and `size_y`.
+    Ellipse,
+}
+
+/// An area light: emits from the node's local x-y plane toward its local -z, like Blender's.
+#[derive(Debug, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct AreaLightExtras {
+    /// Its shape.
+    pub shape: AreaShape,
+    /// Size along local x (diameter for discs), in scene units.
+    pub size: f32,
+    /// Size along local y for rectangles and ellipses (default `size`).
+    pub size_y: Option<f32>,
+    /// Emitted power, W (Blender's Power).
+    pub power: f32,
+    /// Linear Rec.709 colour (default white).
+    #[serde(default = "white")]
+    pub color: [f32; 3],
+}
+
+fn white() -> [f32; 3] {
+    [1.0; 3]
+}
+
+fn one() -> f32 {
+    1.0
+}
+
+/// The `caustic` entry of raw glTF extras, or the default when absent.
+pub fn parse<T: Default + for<'a> Deserialize<'a>>(
+    extras: &gltf::json::Extras,
+) -> Result<T, String> {
+    let Some(raw) = extras else {
+        return Ok(T::default());
+    };
+    #[derive(Deserialize)]
+    struct Wrapper<T> {
+        caustic: Option<T>,
+    }
+    let wrapper: Wrapper<T> = serde_json::from_str(raw.get()).map_err(|e| e.to_string())?;
+    Ok(wrapper.caustic.unwrap_or_default())
+}

@@ -1,0 +1,108 @@
+//! A hash grid over the pass's photons (Hachisuka & Jensen 2009's SPPM uses one over hit points;
+//! gathering per pixel from photons keeps the result independent of thread timing).
+//!
+//! Cells are `2 r` wide, so the photons within `r` of a point lie in the 2 x 2 x 2 cells around
+//! it. Photons are sorted by bucket with a counting sort in photon order: deterministic.
+
+use glam::{IVec3, Vec3};
+
+/// Photon indices bucketed by hashed grid cell.
+pub struct PhotonGrid {
+    cell_size: f32,
+    bucket_start: Vec<u32>,
+    photon_indices: Vec<u32>,
+}
+
+fn hash_cell(cell: IVec3, buckets: usize) -> usize {
+    let h = (cell.x as u32).wrapping_mul(73_856_093)
+        ^ (cell.y as u32).wrapping_mul(19_349_663)
+        ^ (cell.z as u32).wrapping_mul(83_492_791);
+    h as usize % buckets
+}
+
+impl PhotonGrid {
+    /// Buckets `positions` for lookups of radius `radius`.
+    pub fn build(positions: impl Iterator<Item = Vec3> + Clone, count: usize, radius: f32) -> Self {
+        let cell_size = 2.0 * radius;
+        let buckets = (2 * count).max(1);
+        let bucket_of = |p: Vec3| hash_cell((p / cell_size).floor().as_ivec3(), buckets);
+        let mut bucket_start = vec![0u32; buckets + 1];
+        for p in positions.clone() {
+            bucket_start[bucket_of(p) + 1] += 1;
+        }
+        for i in 1..=buckets {
+            bucket_start[i] += bucket_start[i - 1];
+        }
+        let mut next = bucket_start.clone();
+        let mut photon_indices = vec![0u32; count];
+        for (i, p) in positions.enumerate() {
+            let b = bucket_of(p);
+            photon_indices[next[b] as usize] = i as u32;
+            next[b] += 1;
+        }
+        PhotonGrid {
+            cell_size,
+            bucket_start,
+            photon_indices,
+        }
+    }
+
+    /// Calls `visit` with every photon index whose cell is within the 2 x 2 x 2 block around `p`
+    /// (a superset of the photons within the radius; the caller checks distances).
+    pub fn for_each_near(&self, p: Vec3, mut visit: impl FnMut(usize)) {
+        let buckets = self.bucket_start.len() - 1;
+        let base = (p / self.cell_size - 0.5).floor().as_ivec3();
+        let mut seen = [usize::MAX; 8];
+        for (k, offset) in (0..8)
+            .map(|k| IVec3::new(k & 1, (k >> 1) & 1, k >> 2))
+            .enumerate()
+        {
+            let b = hash_cell(base + offset, buckets);
+            if seen[..k].contains(&b) {
+                continue;
+            }
+            seen[k] = b;
+            let range = self.bucket_start[b] as usize..self.bucket_start[b + 1] as usize;
+            for &i in &self.photon_indices[range] {
+                visit(i as usize);
+            }
+        }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn finds_every_photon_within_the_radius() {
+        let points: Vec<Vec3> = (0..2000)
+            .map(|i| {
+                Vec3::new(
+                    (i * 37 % 101) as f32,
+                    (i * 53 % 89) as f32,
+                    (i * 11 % 97) as f32,
+                ) * 0.01
+            })
+            .collect();
+        let radius = 0.07;
+        let grid = PhotonGrid::build(points.iter().copied(), points.len(), radius);
+        for q in [
+            Vec3::splat(0.3),
+            Vec3::new(0.05, 0.8, 0.41),
+            Vec3::new(-0.02, 0.0, 0.9),
+        ] {
+            let mut found = Vec::new();
+            grid.for_each_near(q, |i| {
+                if points[i].distance(q) < radius {
+                    found.push(i)
+                }
+            });
+            found.sort();
+            let expected: Vec<usize> = (0..points.len())
+                .filter(|&i| points[i].distance(q) < radius)
+                .collect();
+            assert_eq!(found, expected);
+        }
+    }
+}

@@ -1,0 +1,184 @@
+//! One SPPM pass (DESIGN.md steps 1 to 4): pass samples, visible points, photons, gather.
+//!
+//! Takes the scene, its BVH and the settings; [`Renderer::run_pass`] gives every pixel's
+//! estimate for pass `i`, which depends only on (scene, settings, seed, i): passes are
+//! independent (Knaus & Zwicker 2011), so any pass range can be rendered anywhere and summed.
+
+mod gather;
+mod grid;
+mod photons;
+pub mod radius;
+mod visible;
+
+use glam::Vec3;
+use rayon::prelude::*;
+
+use crate::accel::Accel;
+use crate::lights::Light;
+use crate::sampling::{pass_sample, Distribution1D};
+use crate::scene::Scene;
+use crate::spectrum::sample_visible_wavelength;
+
+pub use photons::Photon;
+pub use visible::VisiblePoint;
+
+/// Longest path (bounces) an eye path follows through delta surfaces, and a photon overall.
+pub const MAX_DEPTH: u32 = 32;
+
+/// Settings of the SPPM passes.
+#[derive(Clone, Debug)]
+pub struct SppmSettings {
+    /// Image width in pixels.
+    pub width: u32,
+    /// Image height in pixels.
+    pub height: u32,
+    /// Photon paths traced per pass.
+    pub photons_per_pass: usize,
+    /// Knaus & Zwicker's alpha in (0, 1).
+    pub alpha: f64,
+    /// The first pass's gather radius, in scene units.
+    pub initial_radius: f64,
+    /// The random seed.
+    pub seed: u64,
+}
+
+/// What pass `i` shares between all its pixels and photons (DESIGN.md step 1).
+#[derive(Clone, Copy, Debug)]
+pub struct PassSamples {
+    /// The pass index, from 0.
+    pub index: u64,
+    /// The pass wavelength.
+    pub lambda_nm: f32,
+    /// Its density per nanometre.
+    pub lambda_pdf: f32,
+    /// The gather radius.
+    pub radius: f32,
+}
+
+/// One pixel's estimate for one pass, at the pass wavelength.
+#[derive(Clone, Copy, Debug, Default)]
+pub struct PixelEstimate {
+    /// Spectral radiance.
+    pub radiance: f32,
+    /// The same estimate with the kernel's Laplacian in place of the kernel (for the bias term).
+    pub laplacian: f32,
+}
+
+/// Counts of the work a pass did, for the benchmark.
+#[derive(Clone, Copy, Debug, Default)]
+pub struct PassStats {
+    /// Rays from the camera, delta bounces included.
+    pub eye_rays: u64,
+    /// Shadow rays of next-event estimation.
+    pub shadow_rays: u64,
+    /// Rays along photon paths.
+    pub photon_rays: u64,
+    /// Photons stored for gathering.
+    pub photons_stored: u64,
+}
+
+impl std::ops::Add for PassStats {
+    type Output = PassStats;
+    fn add(self, o: PassStats) -> PassStats {
+        PassStats {
+            eye_rays: self.eye_rays + o.eye_rays,
+            shadow_rays: self.shadow_rays + o.shadow_rays,
+            photon_rays: self.photon_rays + o.photon_rays,
+            photons_stored: self.photons_stored + o.photons_stored,
+        }
+    }
+}
+
+/// Everything a pass reads: the scene, its BVH, how lights are chosen, and the settings.
+pub struct Renderer<'a> {
+    scene: &'a Scene,
+    accel: &'a Accel,
+    light_choice: Distribution1D,
+    settings: SppmSettings,
+}
+
+impl<'a> Renderer<'a> {
+    /// A renderer for `scene`; lights are chosen in proportion to their power.
+    pub fn new(scene: &'a Scene, accel: &'a Accel, settings: SppmSettings) -> Self {
+        let light_choice = Distribution1D::new(scene.lights.iter().map(Light::power));
+        Renderer {
+            scene,
+            accel,
+            light_choice,
+            settings,
+        }
+    }
+
+    /// The settings.
+    pub fn settings(&self) -> &SppmSettings {
+        &self.settings
+    }
+
+    /// The wavelength and radius of pass `index` (0-based).
+    pub fn pass_samples(&self, index: u64) -> PassSamples {
+        let (lambda_nm, lambda_pdf) =
+            sample_visible_wavelength(pass_sample(self.settings.seed, index));
+        let r1_squared = self.settings.initial_radius * self.settings.initial_radius;
+        let radius =
+            radius::radius_squared(r1_squared, self.settings.alpha, index + 1).sqrt() as f32;
+        PassSamples {
+            index,
+            lambda_nm,
+            lambda_pdf,
+            radius,
+        }
+    }
+
+    /// Renders pass `index`: one estimate per pixel, in row-major order.
+    pub fn run_pass(&self, index: u64) -> (PassSamples, Vec<PixelEstimate>, PassStats) {
+        let pass = self.pass_samples(index);
+        let (points, eye_stats) = self.trace_visible_points(&pass);
+        let (photons, photon_stats) = self.trace_photons(&pass);
+        let estimates = gather::gather(&points, &photons, pass.radius);
+        (pass, estimates, eye_stats + photon_stats)
+    }
+
+    fn trace_visible_points(&self, pass: &PassSamples) -> (Vec<visible::EyeResult>, PassStats) {
+        let width = self.settings.width as usize;
+        let pixels = width * self.settings.height as usize;
+        let results: Vec<(visible::EyeResult, PassStats)> = (0..pixels)
+            .into_par_iter()
+            .with_min_len(64)
+            .map(|pixel| visible::trace_eye_path(self, pass, pixel))
+            .collect();
+        let stats = results
+            .iter()
+            .fold(PassStats::default(), |a, (_, s)| a + *s);
+        (results.into_iter().map(|(r, _)| r).collect(), stats)
+    }
+
+    fn trace_photons(&self, pass: &PassSamples) -> (Vec<Photon>, PassStats) {
+        const CHUNK: usize = 1024;
+        let count = self.settings.photons_per_pass;
+        let chunks: Vec<(Vec<Photon>, PassStats)> = (0..count.div_ceil(CHUNK))
+            .into_par_iter()
+            .map(|chunk| {
+                let range = chunk * CHUNK..((chunk + 1) * CHUNK).min(count);
+                let mut photons = Vec::new();
+                let mut stats = PassStats::default();
+                for k in range {
+                    stats = stats + photons::trace_photon(self, pass, k as u64, &mut photons);
+                }
+                (photons, stats)
+            })
+            .collect();
+        let stats = chunks.iter().fold(PassStats::default(), |a, (_, s)| a + *s);
+        (chunks.into_iter().flat_map(|(p, _)| p).collect(), stats)
+    }
+
+    /// Whether nothing blocks the segment from `p` (normal `ng`) along `wi` for `distance`.
+    fn unoccluded(&self, p: Vec3, ng: Vec3, wi: Vec3, distance: f32) -> bool {
+        let origin = crate::accel::offset_origin(p, ng, wi);
+        let t_max = if distance.is_finite() {
+            distance * (1.0 - 1e-4)
+        } else {
+            f32::INFINITY
+        };
+        !self.accel.occluded(origin, wi, t_max)
+    }
+}

@@ -1,0 +1,130 @@
+//! The eye pass (DESIGN.md step 2): a camera ray per pixel, followed through delta bounces to the
+//! first non-delta surface, where direct light is estimated by next-event estimation and a
+//! visible point is left for the photons to be gathered at.
+
+use glam::{Vec2, Vec3};
+
+use super::{PassSamples, PassStats, Renderer, MAX_DEPTH};
+use crate::accel::offset_origin;
+use crate::materials::{Bsdf, ShadingFrame, Transport};
+use crate::sampling::{stream, Sampler, Stream};
+
+/// Where a pixel's camera path met its first non-delta surface.
+#[derive(Clone, Copy, Debug)]
+pub struct VisiblePoint {
+    /// Position.
+    pub p: Vec3,
+    /// Normals there.
+    pub frame: ShadingFrame,
+    /// Unit direction back along the path.
+    pub wo: Vec3,
+    /// The BSDF at the pass wavelength.
+    pub bsdf: Bsdf,
+    /// Path throughput from the camera to here.
+    pub beta: f32,
+}
+
+/// A pixel's eye path: the radiance found along it, and its visible point if it has one.
+#[derive(Clone, Copy, Debug)]
+pub struct EyeResult {
+    /// Emission seen along the path plus direct light at the visible point, times throughput.
+    pub radiance: f32,
+    /// Where photons are gathered.
+    pub point: Option<VisiblePoint>,
+}
+
+/// Traces pixel `pixel`'s camera path for `pass`.
+pub fn trace_eye_path(
+    renderer: &Renderer,
+    pass: &PassSamples,
+    pixel: usize,
+) -> (EyeResult, PassStats) {
+    let settings = &renderer.settings;
+    let scene = renderer.scene;
+    let mut rng = stream(settings.seed, Stream::Eye, pass.index, pixel as u64);
+    let (width, height) = (settings.width as usize, settings.height as usize);
+    let film = (Vec2::new((pixel % width) as f32, (pixel / width) as f32) + rng.next_2d())
+        / Vec2::new(width as f32, height as f32);
+    let (mut origin, mut direction) = scene.camera.ray(film, width as f32 / height as f32);
+    let mut result = EyeResult {
+        radiance: 0.0,
+        point: None,
+    };
+    let mut stats = PassStats::default();
+    let mut beta = 1.0f32;
+    for _ in 0..MAX_DEPTH {
+        stats.eye_rays += 1;
+        let Some(hit) = renderer.accel.intersect(origin, direction, f32::INFINITY) else {
+            if let Some(world) = &scene.world {
+                result.radiance += beta * world.radiance(direction, pass.lambda_nm);
+            }
+            break;
+        };
+        let surface = scene.surface(hit.triangle, hit.barycentric);
+        let material = &scene.materials[surface.material as usize];
+        let wo = -direction;
+        result.radiance += beta * material.emitted(pass.lambda_nm, surface.frame.ng, wo);
+        let bsdf = material.bsdf(
+            material.reflectance(surface.uv, pass.lambda_nm),
+            rng.next_1d(),
+        );
+        if bsdf == Bsdf::Black {
+            break;
+        }
+        if !bsdf.is_delta() {
+            let point = VisiblePoint {
+                p: surface.p,
+                frame: surface.frame,
+                wo,
+                bsdf,
+                beta,
+            };
+            result.radiance += beta * direct_light(renderer, pass, &point, &mut rng, &mut stats);
+            result.point = Some(point);
+            break;
+        }
+        let Some(sample) = bsdf.sample(
+            surface.frame,
+            wo,
+            rng.next_2d(),
+            rng.next_1d(),
+            Transport::Radiance,
+        ) else {
+            break;
+        };
+        beta *= sample.weight;
+        origin = offset_origin(surface.p, surface.frame.ng, sample.wi);
+        direction = sample.wi;
+    }
+    (result, stats)
+}
+
+/// Next-event estimation: one light chosen by power, one point on it, one shadow ray.
+fn direct_light(
+    renderer: &Renderer,
+    pass: &PassSamples,
+    point: &VisiblePoint,
+    rng: &mut Sampler,
+    stats: &mut PassStats,
+) -> f32 {
+    let Some((index, p_light)) = renderer.light_choice.sample(rng.next_1d()) else {
+        return 0.0;
+    };
+    let light = &renderer.scene.lights[index];
+    let Some(sample) = light.sample_incident(point.p, rng.next_2d(), pass.lambda_nm) else {
+        return 0.0;
+    };
+    let ShadingFrame { n, ng } = point.frame;
+    if ng.dot(sample.wi) * ng.dot(point.wo) <= 0.0 {
+        return 0.0;
+    }
+    let f = point.bsdf.eval(n, point.wo, sample.wi);
+    if f <= 0.0 {
+        return 0.0;
+    }
+    stats.shadow_rays += 1;
+    if !renderer.unoccluded(point.p, ng, sample.wi, sample.distance) {
+        return 0.0;
+    }
+    f * n.dot(sample.wi).abs() * sample.radiance_over_pdf / p_light
+}
