@@ -17,10 +17,7 @@ fn read_csv(path: &Path) -> Vec<Vec<f64>> {
         .map(|line| {
             line.split(',')
                 .map(|field| {
-                    field
-                        .trim()
-                        .parse()
-                        .unwrap_or_else(|e| panic!("{}: {line}: {e}", path.display()))
+                    field.trim().parse().unwrap_or_else(|e| panic!("{}: {line}: {e}", path.display()))
                 })
                 .collect()
         })
@@ -33,9 +30,7 @@ fn resample(rows: &[Vec<f64>], column: usize) -> Vec<f64> {
     (0..count)
         .map(|i| {
             let lambda = LAMBDA_MIN_NM + i as f64;
-            let k = rows
-                .partition_point(|row| row[0] <= lambda)
-                .clamp(1, rows.len() - 1);
+            let k = rows.partition_point(|row| row[0] <= lambda).clamp(1, rows.len() - 1);
             let (a, b) = (&rows[k - 1], &rows[k]);
             let t = ((lambda - a[0]) / (b[0] - a[0])).clamp(0.0, 1.0);
             a[column] + t * (b[column] - a[column])
@@ -73,14 +68,10 @@ fn main() {
     let d65: Vec<f64> = d65.iter().map(|s| s / luminance).collect();
     let white = [0, 1, 2].map(|row| {
         let xyz: [f64; 3] = [&x, &y, &z].map(|bar| d65.iter().zip(bar).map(|(s, b)| s * b).sum());
-        (0..3)
-            .map(|col| XYZ_TO_REC709[row][col] * xyz[col])
-            .sum::<f64>()
+        (0..3).map(|col| XYZ_TO_REC709[row][col] * xyz[col]).sum::<f64>()
     });
     // Scale each row so that the tabulated D65 maps to exactly (1, 1, 1) (von Kries in RGB).
-    let matrix: Vec<f64> = (0..9)
-        .map(|k| XYZ_TO_REC709[k / 3][k % 3] / white[k / 3])
-        .collect();
+    let matrix: Vec<f64> = (0..9).map(|k| XYZ_TO_REC709[k / 3][k % 3] / white[k / 3]).collect();
     out += &rust_array("CIE_X", &x);
     out += &rust_array("CIE_Y", &y);
     out += &rust_array("CIE_Z", &z);

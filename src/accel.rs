@@ -35,20 +35,10 @@ pub struct Accel {
 impl Accel {
     /// Builds the BVH over `corners` (one entry per triangle, in scene order).
     pub fn build(corners: &[[Vec3; 3]]) -> Self {
-        let triangles: Vec<Triangle> = corners
-            .iter()
-            .map(|c| Triangle {
-                v0: c[0].into(),
-                v1: c[1].into(),
-                v2: c[2].into(),
-            })
-            .collect();
+        let triangles: Vec<Triangle> =
+            corners.iter().map(|c| Triangle { v0: c[0].into(), v1: c[1].into(), v2: c[2].into() }).collect();
         let bvh = (!triangles.is_empty()).then(|| {
-            build_cwbvh_from_tris(
-                &triangles,
-                BvhBuildParams::medium_build(),
-                &mut Duration::default(),
-            )
+            build_cwbvh_from_tris(&triangles, BvhBuildParams::medium_build(), &mut Duration::default())
         });
         Accel { bvh, triangles }
     }
@@ -69,15 +59,8 @@ impl Accel {
             return None;
         }
         let triangle = bvh.primitive_indices[hit.primitive_id as usize];
-        let barycentric = barycentric(
-            &self.triangles[triangle as usize],
-            origin + direction * hit.t,
-        );
-        Some(Hit {
-            triangle,
-            t: hit.t,
-            barycentric,
-        })
+        let barycentric = barycentric(&self.triangles[triangle as usize], origin + direction * hit.t);
+        Some(Hit { triangle, t: hit.t, barycentric })
     }
 
     /// Whether anything lies on the ray from `origin` in the unit `direction` before `t_max`.
@@ -94,11 +77,7 @@ impl Accel {
 
 /// The barycentric coordinates (weights of v1 and v2) of `p`, a point on triangle `tri`.
 fn barycentric(tri: &Triangle, p: Vec3) -> Vec2 {
-    let (v0, e1, e2) = (
-        Vec3::from(tri.v0),
-        Vec3::from(tri.v1 - tri.v0),
-        Vec3::from(tri.v2 - tri.v0),
-    );
+    let (v0, e1, e2) = (Vec3::from(tri.v0), Vec3::from(tri.v1 - tri.v0), Vec3::from(tri.v2 - tri.v0));
     let n = e1.cross(e2);
     let inv = 1.0 / n.length_squared();
     let d = p - v0;
@@ -134,22 +113,14 @@ mod tests {
 
     #[test]
     fn hits_the_closest_of_two_triangles_and_maps_its_index() {
-        let quad = |z: f32| {
-            [
-                Vec3::new(-1.0, -1.0, z),
-                Vec3::new(1.0, -1.0, z),
-                Vec3::new(0.0, 1.0, z),
-            ]
-        };
+        let quad = |z: f32| [Vec3::new(-1.0, -1.0, z), Vec3::new(1.0, -1.0, z), Vec3::new(0.0, 1.0, z)];
         let accel = Accel::build(&[quad(5.0), quad(2.0)]);
         let hit = accel.intersect(Vec3::ZERO, Vec3::Z, f32::INFINITY).unwrap();
         assert_eq!(hit.triangle, 1);
         assert!((hit.t - 2.0).abs() < 1e-6);
         assert!(accel.occluded(Vec3::ZERO, Vec3::Z, 3.0));
         assert!(!accel.occluded(Vec3::ZERO, Vec3::Z, 1.5));
-        assert!(accel
-            .intersect(Vec3::ZERO, -Vec3::Z, f32::INFINITY)
-            .is_none());
+        assert!(accel.intersect(Vec3::ZERO, -Vec3::Z, f32::INFINITY).is_none());
         // Barycentrics weight corners 1 and 2.
         let origin = Vec3::new(0.3, -0.2, 0.0);
         let hit = accel.intersect(origin, Vec3::Z, f32::INFINITY).unwrap();
@@ -162,19 +133,12 @@ mod tests {
     #[test]
     fn offset_origins_leave_the_surface_at_any_scale() {
         for scale in [1e-4f32, 1.0, 1e5, 1e6] {
-            let c = [
-                Vec3::new(0.0, 0.0, 0.0),
-                Vec3::new(1.0, 0.0, 0.0),
-                Vec3::new(0.0, 1.0, 0.0),
-            ]
-            .map(|v| v * scale + Vec3::splat(scale * 0.3));
+            let c = [Vec3::new(0.0, 0.0, 0.0), Vec3::new(1.0, 0.0, 0.0), Vec3::new(0.0, 1.0, 0.0)]
+                .map(|v| v * scale + Vec3::splat(scale * 0.3));
             let accel = Accel::build(&[c]);
             let p = (c[0] + c[1] + c[2]) / 3.0;
             let o = offset_origin(p, Vec3::Z, Vec3::new(0.3, 0.2, 1.0).normalize());
-            assert!(
-                !accel.occluded(o, Vec3::new(0.3, 0.2, 1.0).normalize(), f32::INFINITY),
-                "{scale}"
-            );
+            assert!(!accel.occluded(o, Vec3::new(0.3, 0.2, 1.0).normalize(), f32::INFINITY), "{scale}");
         }
     }
 }

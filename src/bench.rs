@@ -45,14 +45,10 @@ pub fn run(scene_path: &Path, resolution: [u32; 2], passes: u64) -> Result<(), S
     );
     let renderer = Renderer::new(&scene, &accel, sppm_settings(&settings, &scene));
     for threads in [1, 2] {
-        let pool = rayon::ThreadPoolBuilder::new()
-            .num_threads(threads)
-            .build()
-            .map_err(|e| e.to_string())?;
+        let pool = rayon::ThreadPoolBuilder::new().num_threads(threads).build().map_err(|e| e.to_string())?;
         let start = Instant::now();
-        let stats = pool.install(|| {
-            (0..passes).fold(PassStats::default(), |sum, i| sum + renderer.run_pass(i).2)
-        });
+        let stats =
+            pool.install(|| (0..passes).fold(PassStats::default(), |sum, i| sum + renderer.run_pass(i).2));
         let seconds = start.elapsed().as_secs_f64();
         let rays = stats.eye_rays + stats.shadow_rays + stats.photon_rays;
         let photon_paths = passes * renderer.settings().photons_per_pass as u64;

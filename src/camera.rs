@@ -40,4 +40,34 @@ impl Camera {
         let direction = (self.forward + x * self.right + y * self.up).normalize();
         (self.position, direction)
     }
+
+    /// Where the point `p` appears on the film (the inverse of [`Camera::ray`]), or `None`
+    /// behind the camera.
+    pub fn project(&self, p: Vec3, aspect: f32) -> Option<Vec2> {
+        let d = p - self.position;
+        let z = d.dot(self.forward);
+        if z <= 0.0 {
+            return None;
+        }
+        let x = d.dot(self.right) / (z * self.tan_half_fov_y * aspect);
+        let y = d.dot(self.up) / (z * self.tan_half_fov_y);
+        Some(Vec2::new((x + 1.0) / 2.0, (1.0 - y) / 2.0))
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn project_inverts_ray() {
+        let camera = Camera::from_node(
+            Mat4::from_rotation_y(0.3) * Mat4::from_translation(Vec3::new(1.0, 2.0, 3.0)),
+            0.8,
+        );
+        let film = Vec2::new(0.2, 0.7);
+        let (origin, direction) = camera.ray(film, 1.5);
+        let back = camera.project(origin + 5.0 * direction, 1.5).unwrap();
+        assert!((back - film).length() < 1e-5, "{back}");
+    }
 }

@@ -85,31 +85,23 @@ fn positive_f64(s: &str) -> Result<f64, String> {
 fn unit_interval(s: &str) -> Result<f64, String> {
     match s.parse::<f64>() {
         Ok(v) if v > 0.0 && v < 1.0 => Ok(v),
-        _ => Err(format!(
-            "expected a number strictly between 0 and 1, got '{s}'"
-        )),
+        _ => Err(format!("expected a number strictly between 0 and 1, got '{s}'")),
     }
 }
 
 fn parse_resolution(s: &str) -> Result<[u32; 2], String> {
-    let parsed = s
-        .split_once(['x', 'X'])
-        .and_then(|(w, h)| Some([w.parse::<u32>().ok()?, h.parse::<u32>().ok()?]));
+    let parsed =
+        s.split_once(['x', 'X']).and_then(|(w, h)| Some([w.parse::<u32>().ok()?, h.parse::<u32>().ok()?]));
     match parsed {
         Some([w, h]) if (1..=65536).contains(&w) && (1..=65536).contains(&h) => Ok([w, h]),
-        _ => Err(format!(
-            "expected WIDTHxHEIGHT with each between 1 and 65536, e.g. 640x360; got '{s}'"
-        )),
+        _ => Err(format!("expected WIDTHxHEIGHT with each between 1 and 65536, e.g. 640x360; got '{s}'")),
     }
 }
 
 impl RenderArgs {
     fn settings(&self) -> RenderSettings {
         RenderSettings {
-            scene: self
-                .scene
-                .clone()
-                .unwrap_or_else(|| PathBuf::from(DEMO_SCENE)),
+            scene: self.scene.clone().unwrap_or_else(|| PathBuf::from(DEMO_SCENE)),
             out_dir: self.out.clone(),
             passes: self.passes,
             time_budget_s: self.time_budget,

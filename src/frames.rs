@@ -68,10 +68,7 @@ pub struct FrameReport {
 /// Image size: the flag, else the scene's extras, else 640 wide at the camera's aspect ratio.
 pub fn resolution(settings: &RenderSettings, scene: &Scene) -> [u32; 2] {
     settings.resolution.or(scene.resolution).unwrap_or_else(|| {
-        let aspect = scene
-            .aspect_ratio
-            .filter(|a| a.is_finite() && *a > 0.0)
-            .unwrap_or(16.0 / 9.0);
+        let aspect = scene.aspect_ratio.filter(|a| a.is_finite() && *a > 0.0).unwrap_or(16.0 / 9.0);
         [640, ((640.0 / aspect).round() as u32).max(1)]
     })
 }
@@ -108,33 +105,20 @@ pub fn render(settings: &RenderSettings) -> Result<FrameReport, String> {
     let scene = load_scene(settings)?;
     let accel = Accel::build(&scene.triangle_corners());
     let renderer = Renderer::new(&scene, &accel, sppm_settings(settings, &scene));
-    std::fs::create_dir_all(&settings.out_dir).map_err(|e| {
-        format!(
-            "cannot create output folder {}: {e}",
-            settings.out_dir.display()
-        )
-    })?;
+    std::fs::create_dir_all(&settings.out_dir)
+        .map_err(|e| format!("cannot create output folder {}: {e}", settings.out_dir.display()))?;
     let (film, passes, elapsed_s, stats) = run_passes(&renderer, settings);
     let path = settings.out_dir.join(format!("frame_{:04}.exr", 1));
     film.write_exr(&path)?;
-    Ok(FrameReport {
-        path,
-        film,
-        passes,
-        elapsed_s,
-        stats,
-    })
+    Ok(FrameReport { path, film, passes, elapsed_s, stats })
 }
 
 /// Runs passes 0, 1, ... until the pass count or the time budget is reached.
 pub fn run_passes(renderer: &Renderer, settings: &RenderSettings) -> (Film, u64, f64, PassStats) {
     let s = renderer.settings();
     let mut film = Film::new(s.width, s.height);
-    let limit = settings.passes.or(if settings.time_budget_s.is_some() {
-        None
-    } else {
-        Some(DEFAULT_PASSES)
-    });
+    let limit =
+        settings.passes.or(if settings.time_budget_s.is_some() { None } else { Some(DEFAULT_PASSES) });
     let progress = Progress::new(settings.progress, limit);
     let start = Instant::now();
     let mut stats = PassStats::default();
@@ -150,9 +134,7 @@ pub fn run_passes(renderer: &Renderer, settings: &RenderSettings) -> (Film, u64,
         pass += 1;
         let elapsed = start.elapsed().as_secs_f64();
         progress.update(pass, elapsed);
-        let out_of_time = settings
-            .time_budget_s
-            .is_some_and(|budget| elapsed >= budget);
+        let out_of_time = settings.time_budget_s.is_some_and(|budget| elapsed >= budget);
         if limit.is_some_and(|n| pass >= n) || out_of_time {
             progress.finish();
             return (film, pass, elapsed, stats);
@@ -170,10 +152,8 @@ struct Progress {
 impl Progress {
     fn new(style: ProgressStyle, limit: Option<u64>) -> Self {
         let bar = (style == ProgressStyle::Bar).then(|| {
-            let bar = indicatif::ProgressBar::with_draw_target(
-                limit,
-                indicatif::ProgressDrawTarget::stderr(),
-            );
+            let bar =
+                indicatif::ProgressBar::with_draw_target(limit, indicatif::ProgressDrawTarget::stderr());
             bar.set_style(
                 indicatif::ProgressStyle::with_template(
                     "frame 1 [{bar:40}] pass {pos}/{len} {elapsed_precise} eta {eta}",
@@ -188,11 +168,7 @@ impl Progress {
 
     fn update(&self, pass: u64, elapsed_s: f64) {
         match self.style {
-            ProgressStyle::Bar => self
-                .bar
-                .as_ref()
-                .expect("bar style has a bar")
-                .set_position(pass),
+            ProgressStyle::Bar => self.bar.as_ref().expect("bar style has a bar").set_position(pass),
             ProgressStyle::Json => println!(
                 "{}",
                 serde_json::json!({"frame": 1, "pass": pass, "passes": self.limit, "elapsed_s": elapsed_s})

@@ -14,8 +14,7 @@ use glam::{Vec2, Vec3};
 use std::f32::consts::PI;
 
 use crate::sampling::{
-    basis, square_to_cone, square_to_cosine_hemisphere, square_to_disc, square_to_sphere,
-    square_to_triangle,
+    basis, square_to_cone, square_to_cosine_hemisphere, square_to_disc, square_to_sphere, square_to_triangle,
 };
 use crate::spectrum::{d65, RgbSpectrum};
 
@@ -100,6 +99,8 @@ pub struct LightSample {
     pub distance: f32,
     /// Incident radiance over the density of `wi` (cosine at the receiver not included).
     pub radiance_over_pdf: f32,
+    /// The density of `wi` per solid angle; zero for delta lights (a point, a spot, a delta sun).
+    pub pdf: f32,
 }
 
 /// A photon leaving a light.
@@ -149,30 +150,19 @@ impl Light {
     pub fn power(&self) -> f64 {
         let power = match self {
             Light::Point { intensity, .. } => 4.0 * PI as f64 * intensity.luminance(),
-            Light::Spot {
-                intensity,
-                cos_outer,
-                ..
-            } => 2.0 * PI as f64 * (1.0 - f64::from(*cos_outer)) * intensity.luminance(),
-            Light::Sun {
-                irradiance, sphere, ..
-            } => irradiance.luminance() * f64::from(PI * sphere.radius * sphere.radius),
-            Light::Triangle {
-                corners,
-                radiance,
-                both_sides,
-            } => {
+            Light::Spot { intensity, cos_outer, .. } => {
+                2.0 * PI as f64 * (1.0 - f64::from(*cos_outer)) * intensity.luminance()
+            }
+            Light::Sun { irradiance, sphere, .. } => {
+                irradiance.luminance() * f64::from(PI * sphere.radius * sphere.radius)
+            }
+            Light::Triangle { corners, radiance, both_sides } => {
                 let sides = if *both_sides { 2.0 } else { 1.0 };
                 sides * radiance.luminance() * f64::from(PI * triangle_area(corners))
             }
             Light::World(world) => {
                 let r = f64::from(world.sphere.radius);
-                world.radiance.luminance()
-                    * 4.0
-                    * std::f64::consts::PI
-                    * std::f64::consts::PI
-                    * r
-                    * r
+                world.radiance.luminance() * 4.0 * std::f64::consts::PI * std::f64::consts::PI * r * r
             }
         };
         if power.is_finite() {
@@ -185,111 +175,88 @@ impl Light {
     /// Samples light arriving at `p` (for next-event estimation); `None` when none arrives.
     pub fn sample_incident(&self, p: Vec3, u: Vec2, lambda_nm: f32) -> Option<LightSample> {
         match self {
-            Light::Point {
-                position,
-                intensity,
-            } => {
+            Light::Point { position, intensity } => {
                 let (wi, distance) = direction_and_distance(p, *position)?;
                 let radiance_over_pdf = spectral(intensity, lambda_nm) / (distance * distance);
-                Some(LightSample {
-                    wi,
-                    distance,
-                    radiance_over_pdf,
-                })
+                Some(LightSample { wi, distance, radiance_over_pdf, pdf: 0.0 })
             }
-            Light::Spot {
-                position,
-                axis,
-                intensity,
-                cos_inner,
-                cos_outer,
-            } => {
+            Light::Spot { position, axis, intensity, cos_inner, cos_outer } => {
                 let (wi, distance) = direction_and_distance(p, *position)?;
                 let falloff = spot_falloff(-wi.dot(*axis), *cos_inner, *cos_outer);
-                let radiance_over_pdf =
-                    spectral(intensity, lambda_nm) * falloff / (distance * distance);
-                (falloff > 0.0).then_some(LightSample {
-                    wi,
-                    distance,
-                    radiance_over_pdf,
-                })
+                let radiance_over_pdf = spectral(intensity, lambda_nm) * falloff / (distance * distance);
+                (falloff > 0.0).then_some(LightSample { wi, distance, radiance_over_pdf, pdf: 0.0 })
             }
-            Light::Sun {
-                direction,
-                irradiance,
-                cos_max,
-                ..
-            } => {
+            Light::Sun { direction, irradiance, cos_max, .. } => {
                 let (t, b) = basis(-*direction);
                 let local = square_to_cone(u, *cos_max);
                 let wi = (t * local.x + b * local.y - *direction * local.z).normalize();
                 let radiance_over_pdf = spectral(irradiance, lambda_nm);
-                Some(LightSample {
-                    wi,
-                    distance: f32::INFINITY,
-                    radiance_over_pdf,
-                })
+                let pdf = if *cos_max < 1.0 { 1.0 / cone_solid_angle(*cos_max) } else { 0.0 };
+                Some(LightSample { wi, distance: f32::INFINITY, radiance_over_pdf, pdf })
             }
-            Light::Triangle {
-                corners,
-                radiance,
-                both_sides,
-            } => {
+            Light::Triangle { corners, radiance, .. } => {
                 let q = point_in_triangle(corners, u);
                 let (wi, distance) = direction_and_distance(p, q)?;
-                let cos_light = -triangle_normal(corners).dot(wi);
-                let cos_light = if *both_sides {
-                    cos_light.abs()
-                } else {
-                    cos_light
-                };
-                if cos_light <= 0.0 {
+                let pdf = self.pdf_incident(p, wi, q);
+                if pdf <= 0.0 {
                     return None;
                 }
-                let area = triangle_area(corners);
-                let radiance_over_pdf =
-                    spectral(radiance, lambda_nm) * area * cos_light / (distance * distance);
-                Some(LightSample {
-                    wi,
-                    distance,
-                    radiance_over_pdf,
-                })
+                let radiance_over_pdf = spectral(radiance, lambda_nm) / pdf;
+                Some(LightSample { wi, distance, radiance_over_pdf, pdf })
             }
             Light::World(world) => {
                 let wi = square_to_sphere(u);
-                let radiance_over_pdf = world.radiance(-wi, lambda_nm) * 4.0 * PI;
-                Some(LightSample {
-                    wi,
-                    distance: f32::INFINITY,
-                    radiance_over_pdf,
-                })
+                let pdf = 1.0 / (4.0 * PI);
+                let radiance_over_pdf = world.radiance(wi, lambda_nm) / pdf;
+                Some(LightSample { wi, distance: f32::INFINITY, radiance_over_pdf, pdf })
             }
         }
     }
 
+    /// The density per solid angle with which [`Light::sample_incident`] picks the direction `wi`
+    /// from `p`, given that the ray along it reaches this light at `q` (a point on a triangle
+    /// light) or escapes (distant lights). Zero for delta lights.
+    pub fn pdf_incident(&self, p: Vec3, wi: Vec3, q: Vec3) -> f32 {
+        match self {
+            Light::Triangle { corners, both_sides, .. } => {
+                let cos_light = -triangle_normal(corners).dot(wi);
+                let cos_light = if *both_sides { cos_light.abs() } else { cos_light };
+                if cos_light <= 0.0 {
+                    return 0.0;
+                }
+                p.distance_squared(q) / (triangle_area(corners) * cos_light)
+            }
+            Light::Sun { direction, cos_max, .. } if *cos_max < 1.0 && -direction.dot(wi) >= *cos_max => {
+                1.0 / cone_solid_angle(*cos_max)
+            }
+            Light::World(_) => 1.0 / (4.0 * PI),
+            _ => 0.0,
+        }
+    }
+
+    /// Radiance that a ray of direction `dir` leaving the scene receives from this light
+    /// (distant lights with a solid angle: the world, a sun with an angular diameter).
+    pub fn escaped_radiance(&self, dir: Vec3, lambda_nm: f32) -> f32 {
+        match self {
+            Light::Sun { direction, irradiance, cos_max, .. }
+                if *cos_max < 1.0 && -direction.dot(dir) >= *cos_max =>
+            {
+                spectral(irradiance, lambda_nm) / cone_solid_angle(*cos_max)
+            }
+            Light::World(world) => world.radiance(dir, lambda_nm),
+            _ => 0.0,
+        }
+    }
+
     /// Samples a photon leaving the light at `lambda_nm`.
-    pub fn emit_photon(
-        &self,
-        u_position: Vec2,
-        u_direction: Vec2,
-        lambda_nm: f32,
-    ) -> Option<EmittedPhoton> {
+    pub fn emit_photon(&self, u_position: Vec2, u_direction: Vec2, lambda_nm: f32) -> Option<EmittedPhoton> {
         let photon = match self {
-            Light::Point {
-                position,
-                intensity,
-            } => EmittedPhoton {
+            Light::Point { position, intensity } => EmittedPhoton {
                 origin: *position,
                 direction: square_to_sphere(u_direction),
                 flux: spectral(intensity, lambda_nm) * 4.0 * PI,
             },
-            Light::Spot {
-                position,
-                axis,
-                intensity,
-                cos_inner,
-                cos_outer,
-            } => {
+            Light::Spot { position, axis, intensity, cos_inner, cos_outer } => {
                 let (t, b) = basis(*axis);
                 let local = square_to_cone(u_direction, *cos_outer);
                 let falloff = spot_falloff(local.z, *cos_inner, *cos_outer);
@@ -300,12 +267,7 @@ impl Light {
                     flux: spectral(intensity, lambda_nm) * falloff * solid_angle,
                 }
             }
-            Light::Sun {
-                direction,
-                irradiance,
-                cos_max,
-                sphere,
-            } => {
+            Light::Sun { direction, irradiance, cos_max, sphere } => {
                 let (t, b) = basis(*direction);
                 let local = square_to_cone(u_direction, *cos_max);
                 let direction = (t * local.x + b * local.y + *direction * local.z).normalize();
@@ -315,11 +277,7 @@ impl Light {
                     flux: spectral(irradiance, lambda_nm) * PI * sphere.radius * sphere.radius,
                 }
             }
-            Light::Triangle {
-                corners,
-                radiance,
-                both_sides,
-            } => {
+            Light::Triangle { corners, radiance, both_sides } => {
                 let mut n = triangle_normal(corners);
                 let mut u = u_direction;
                 let mut sides = 1.0;
@@ -346,12 +304,17 @@ impl Light {
                 EmittedPhoton {
                     origin: disc_origin(&world.sphere, direction, u_position),
                     direction,
-                    flux: world.radiance(direction, lambda_nm) * 4.0 * PI * PI * r * r,
+                    flux: world.radiance(-direction, lambda_nm) * 4.0 * PI * PI * r * r,
                 }
             }
         };
         (photon.flux > 0.0 && photon.flux.is_finite()).then_some(photon)
     }
+}
+
+/// The solid angle of a cone of half-angle `acos(cos_max)`.
+fn cone_solid_angle(cos_max: f32) -> f32 {
+    2.0 * PI * (1.0 - cos_max)
 }
 
 /// Unit direction from `p` to `q` and their distance; `None` if they coincide.
@@ -370,12 +333,7 @@ mod tests {
         // A 2 x 2 square emitter (two triangles) at height 1 above a point: irradiance is pi L
         // times the form factor 4 * 2 / (2 pi) * atan(1 / sqrt 2) / sqrt 2 (parallel rectangles).
         let s = 1.0;
-        let c = [
-            Vec3::new(-s, -s, 1.0),
-            Vec3::new(s, -s, 1.0),
-            Vec3::new(s, s, 1.0),
-            Vec3::new(-s, s, 1.0),
-        ];
+        let c = [Vec3::new(-s, -s, 1.0), Vec3::new(s, -s, 1.0), Vec3::new(s, s, 1.0), Vec3::new(-s, s, 1.0)];
         let lights = [
             Light::Triangle {
                 corners: [c[0], c[2], c[1]],
@@ -392,10 +350,7 @@ mod tests {
         let mut irradiance = 0.0;
         for light in &lights {
             for i in 0..n {
-                let u = Vec2::new(
-                    (i as f32 + 0.5) / n as f32,
-                    ((i * 7919) % n) as f32 / n as f32,
-                );
+                let u = Vec2::new((i as f32 + 0.5) / n as f32, ((i * 7919) % n) as f32 / n as f32);
                 if let Some(s) = light.sample_incident(Vec3::ZERO, u, 555.0) {
                     irradiance += s.radiance_over_pdf * s.wi.z.max(0.0) / n as f32;
                 }
@@ -403,9 +358,6 @@ mod tests {
         }
         let form_factor = 4.0 / PI * (0.5f32.sqrt()).atan() * 0.5f32.sqrt();
         let expected = PI * form_factor * d65(555.0);
-        assert!(
-            (irradiance / expected - 1.0).abs() < 0.02,
-            "{irradiance} vs {expected}"
-        );
+        assert!((irradiance / expected - 1.0).abs() < 0.02, "{irradiance} vs {expected}");
     }
 }

@@ -61,10 +61,7 @@ pub fn square_to_disc(u: Vec2) -> Vec2 {
     let (r, theta) = if p.x.abs() > p.y.abs() {
         (p.x, std::f32::consts::FRAC_PI_4 * (p.y / p.x))
     } else {
-        (
-            p.y,
-            std::f32::consts::FRAC_PI_2 - std::f32::consts::FRAC_PI_4 * (p.x / p.y),
-        )
+        (p.y, std::f32::consts::FRAC_PI_2 - std::f32::consts::FRAC_PI_4 * (p.x / p.y))
     };
     r * Vec2::new(theta.cos(), theta.sin())
 }
@@ -138,10 +135,7 @@ impl Distribution1D {
             return None;
         }
         let target = f64::from(u) * self.total;
-        let i = self
-            .cdf
-            .partition_point(|&c| c <= target)
-            .min(self.cdf.len() - 1);
+        let i = self.cdf.partition_point(|&c| c <= target).min(self.cdf.len() - 1);
         Some((i, self.probability(i)))
     }
 

@@ -15,11 +15,7 @@ pub fn reflect(wo: Vec3, n: Vec3) -> Vec3 {
 pub fn sample_smooth(f0: f32, n: Vec3, wo: Vec3) -> Option<BsdfSample> {
     let n = face_toward(n, wo);
     let weight = microfacet::schlick(f0, n.dot(wo));
-    Some(BsdfSample {
-        wi: reflect(wo, n),
-        weight,
-        is_delta: true,
-    })
+    Some(BsdfSample { wi: reflect(wo, n), weight, pdf: 0.0, is_delta: true })
 }
 
 /// `wo` and `wi` in the frame of `n` (flipped to the side of `wo`).
@@ -42,6 +38,17 @@ pub fn eval_rough(f0: f32, alpha: f32, n: Vec3, wo: Vec3, wi: Vec3) -> f32 {
     d * g * microfacet::schlick(f0, wo.dot(h)) / (4.0 * wo.z * wi.z)
 }
 
+/// The density of visible-normal sampling: `D(h) G1(wo) / (4 wo.z)` (Heitz 2018, eq. 17 with
+/// the reflection Jacobian `1 / (4 wo.h)`).
+pub fn pdf_rough(alpha: f32, n: Vec3, wo: Vec3, wi: Vec3) -> f32 {
+    let (wo, wi, _) = to_local(n, wo, wi);
+    if wo.z <= 0.0 || wi.z <= 0.0 {
+        return 0.0;
+    }
+    let h = (wo + wi).normalize();
+    microfacet::distribution(alpha, h) * microfacet::masking(alpha, wo) / (4.0 * wo.z)
+}
+
 /// Visible-normal sampling: the weight is `F G2 / G1(wo)`.
 pub fn sample_rough(f0: f32, alpha: f32, n: Vec3, wo: Vec3, u: Vec2) -> Option<BsdfSample> {
     let (wo_local, _, [t, b, n]) = to_local(n, wo, wo);
@@ -60,6 +67,7 @@ pub fn sample_rough(f0: f32, alpha: f32, n: Vec3, wo: Vec3, u: Vec2) -> Option<B
     Some(BsdfSample {
         wi: wi.normalize(),
         weight,
+        pdf: microfacet::distribution(alpha, h) * microfacet::masking(alpha, wo_local) / (4.0 * wo_local.z),
         is_delta: false,
     })
 }

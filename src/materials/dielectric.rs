@@ -24,19 +24,11 @@ pub fn fresnel_dielectric(cos_i: f32, eta: f32) -> f32 {
 /// Reflects or refracts `wo` at a boundary of geometric normal `ng` (pointing outside).
 pub fn sample(ior: f32, ng: Vec3, wo: Vec3, u: f32, mode: Transport) -> Option<BsdfSample> {
     let entering = ng.dot(wo) > 0.0;
-    let (n, eta) = if entering {
-        (ng, ior)
-    } else {
-        (-ng, 1.0 / ior)
-    };
+    let (n, eta) = if entering { (ng, ior) } else { (-ng, 1.0 / ior) };
     let cos_i = n.dot(wo).min(1.0);
     let f = fresnel_dielectric(cos_i, eta);
     if u < f {
-        return Some(BsdfSample {
-            wi: reflect(wo, n),
-            weight: 1.0,
-            is_delta: true,
-        });
+        return Some(BsdfSample { wi: reflect(wo, n), weight: 1.0, pdf: 0.0, is_delta: true });
     }
     let sin2_t = (1.0 - cos_i * cos_i) / (eta * eta);
     let cos_t = (1.0 - sin2_t).max(0.0).sqrt();
@@ -45,11 +37,7 @@ pub fn sample(ior: f32, ng: Vec3, wo: Vec3, u: f32, mode: Transport) -> Option<B
         Transport::Radiance => 1.0 / (eta * eta),
         Transport::Importance => 1.0,
     };
-    Some(BsdfSample {
-        wi,
-        weight,
-        is_delta: true,
-    })
+    Some(BsdfSample { wi, weight, pdf: 0.0, is_delta: true })
 }
 
 #[cfg(test)]

@@ -15,15 +15,20 @@ pub fn eval(albedo: f32, n: Vec3, wo: Vec3, wi: Vec3) -> f32 {
     }
 }
 
+/// The cosine-weighted density of `wi` on the side of `wo`.
+pub fn pdf(n: Vec3, wo: Vec3, wi: Vec3) -> f32 {
+    if n.dot(wo) * n.dot(wi) > 0.0 {
+        n.dot(wi).abs() * FRAC_1_PI
+    } else {
+        0.0
+    }
+}
+
 /// Cosine-weighted reflection on the side of `wo`: the weight is the albedo.
 pub fn sample(albedo: f32, n: Vec3, wo: Vec3, u: Vec2) -> Option<BsdfSample> {
     let n = face_toward(n, wo);
     let (t, b) = basis(n);
     let local = square_to_cosine_hemisphere(u);
     let wi = (t * local.x + b * local.y + n * local.z).normalize();
-    Some(BsdfSample {
-        wi,
-        weight: albedo,
-        is_delta: false,
-    })
+    Some(BsdfSample { pdf: local.z * FRAC_1_PI, wi, weight: albedo, is_delta: false })
 }

@@ -32,11 +32,7 @@ pub fn masking_shadowing(alpha: f32, wo: Vec3, wi: Vec3) -> f32 {
 /// A visible normal for `wo` (with `wo.z > 0`); its density is `G1(wo) max(0, wo.h) D(h) / wo.z`.
 pub fn sample_visible_normal(alpha: f32, wo: Vec3, u: Vec2) -> Vec3 {
     let wh = Vec3::new(alpha * wo.x, alpha * wo.y, wo.z).normalize();
-    let t1 = if wh.z < 0.9999 {
-        Vec3::Z.cross(wh).normalize()
-    } else {
-        Vec3::X
-    };
+    let t1 = if wh.z < 0.9999 { Vec3::Z.cross(wh).normalize() } else { Vec3::X };
     let t2 = wh.cross(t1);
     let r = u.x.sqrt();
     let phi = 2.0 * PI * u.y;

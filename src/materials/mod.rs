@@ -100,17 +100,12 @@ impl Material {
             if self.roughness < SMOOTH_ROUGHNESS {
                 return Bsdf::Conductor { f0: reflectance };
             }
-            return Bsdf::RoughConductor {
-                f0: reflectance,
-                alpha,
-            };
+            return Bsdf::RoughConductor { f0: reflectance, alpha };
         }
         if self.emission.is_some() && reflectance == 0.0 {
             return Bsdf::Black;
         }
-        Bsdf::Diffuse {
-            albedo: reflectance,
-        }
+        Bsdf::Diffuse { albedo: reflectance }
     }
 }
 
@@ -159,6 +154,8 @@ pub struct BsdfSample {
     pub wi: Vec3,
     /// `f * |cos| / pdf`: the factor the path throughput is multiplied by.
     pub weight: f32,
+    /// The density of `wi` per solid angle (meaningless for delta lobes).
+    pub pdf: f32,
     /// Whether the sample came from a delta lobe.
     pub is_delta: bool,
 }
@@ -174,6 +171,15 @@ impl Bsdf {
         match *self {
             Bsdf::Diffuse { albedo } => diffuse::eval(albedo, n, wo, wi),
             Bsdf::RoughConductor { f0, alpha } => conductor::eval_rough(f0, alpha, n, wo, wi),
+            _ => 0.0,
+        }
+    }
+
+    /// The density per solid angle with which [`Bsdf::sample`] picks `wi` (zero for delta lobes).
+    pub fn pdf(&self, n: Vec3, wo: Vec3, wi: Vec3) -> f32 {
+        match *self {
+            Bsdf::Diffuse { .. } => diffuse::pdf(n, wo, wi),
+            Bsdf::RoughConductor { alpha, .. } => conductor::pdf_rough(alpha, n, wo, wi),
             _ => 0.0,
         }
     }

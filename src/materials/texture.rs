@@ -30,13 +30,7 @@ fn srgb_to_linear(c: u8) -> f32 {
 
 impl Texture {
     /// A texture from 8-bit sRGB texels (`channels` per texel, 3 or 4) times the linear `factor`.
-    pub fn from_srgb8(
-        width: usize,
-        height: usize,
-        channels: usize,
-        pixels: &[u8],
-        factor: Vec3,
-    ) -> Self {
+    pub fn from_srgb8(width: usize, height: usize, channels: usize, pixels: &[u8], factor: Vec3) -> Self {
         let mut cache: HashMap<[u8; 3], RgbSpectrum> = HashMap::new();
         let texels = pixels
             .chunks_exact(channels)
@@ -48,11 +42,7 @@ impl Texture {
                 })
             })
             .collect();
-        Texture {
-            width,
-            height,
-            texels,
-        }
+        Texture { width, height, texels }
     }
 
     /// The reflectance at texture coordinate `uv` and `lambda_nm`.

@@ -87,9 +87,7 @@ fn one() -> f32 {
 }
 
 /// The `caustic` entry of raw glTF extras, or the default when absent.
-pub fn parse<T: Default + for<'a> Deserialize<'a>>(
-    extras: &gltf::json::Extras,
-) -> Result<T, String> {
+pub fn parse<T: Default + for<'a> Deserialize<'a>>(extras: &gltf::json::Extras) -> Result<T, String> {
     let Some(raw) = extras else {
         return Ok(T::default());
     };

@@ -12,7 +12,7 @@ use glam::{Mat3, Mat4, Vec2, Vec3};
 use gltf::khr_lights_punctual::Kind;
 
 use super::extras::{self, AreaLightExtras, NodeExtras, SceneExtras};
-use super::{shapes, Scene, SceneError, TriangleRef};
+use super::{shapes, Scene, SceneError, TriangleRef, NOT_A_LIGHT};
 use crate::camera::Camera;
 use crate::lights::{Light, World};
 use crate::materials::{BaseColour, Material, Texture};
@@ -32,26 +32,19 @@ struct Builder<'a> {
 
 /// Loads `path` into a [`Scene`].
 pub fn load(path: &Path) -> Result<Scene, SceneError> {
-    let fail = |message: String| SceneError {
-        path: path.to_path_buf(),
-        message,
-    };
+    let fail = |message: String| SceneError { path: path.to_path_buf(), message };
     if !path.exists() {
         return Err(fail("no such file".into()));
     }
-    let (document, buffers, images) =
-        gltf::import(path).map_err(|e| fail(describe_import_error(e)))?;
+    let (document, buffers, images) = gltf::import(path).map_err(|e| fail(describe_import_error(e)))?;
     let gltf_scene = document
         .default_scene()
         .or_else(|| document.scenes().next())
         .ok_or_else(|| fail("the file has no scene".into()))?;
-    let scene_extras: SceneExtras = extras::parse(gltf_scene.extras())
-        .map_err(|e| fail(format!("scene extras `caustic`: {e}")))?;
-    let mut materials: Vec<Material> = document
-        .materials()
-        .map(|m| material(&m, &images))
-        .collect::<Result<_, _>>()
-        .map_err(fail)?;
+    let scene_extras: SceneExtras =
+        extras::parse(gltf_scene.extras()).map_err(|e| fail(format!("scene extras `caustic`: {e}")))?;
+    let mut materials: Vec<Material> =
+        document.materials().map(|m| material(&m, &images)).collect::<Result<_, _>>().map_err(fail)?;
     let material_offset = materials.len() as u32;
     materials.push(Material::default_grey());
     let mut builder = Builder {
@@ -64,11 +57,7 @@ pub fn load(path: &Path) -> Result<Scene, SceneError> {
     for node in gltf_scene.nodes() {
         builder.visit(&node, Mat4::IDENTITY).map_err(fail)?;
     }
-    let world = scene_extras
-        .world
-        .map(|w| world(&w))
-        .transpose()
-        .map_err(fail)?;
+    let world = scene_extras.world.map(|w| world(&w)).transpose().map_err(fail)?;
     builder.finish(world).map_err(fail)
 }
 
@@ -78,10 +67,7 @@ fn describe_import_error(error: gltf::Error) -> String {
         gltf::Error::Io(e) => format!("cannot read the file or a file it references: {e}"),
         gltf::Error::Deserialize(e) => format!("not a valid glTF file (malformed JSON): {e}"),
         gltf::Error::Validation(errors) => {
-            let list: Vec<String> = errors
-                .iter()
-                .map(|(path, e)| format!("{path}: {e}"))
-                .collect();
+            let list: Vec<String> = errors.iter().map(|(path, e)| format!("{path}: {e}")).collect();
             format!(
                 "not a valid glTF 2.0 file (unsupported required extension or invalid field): {}",
                 list.join("; ")
@@ -99,7 +85,8 @@ fn empty_scene(materials: Vec<Material>, resolution: Option<[u32; 2]>) -> Scene 
         triangles: Vec::new(),
         materials,
         lights: Vec::new(),
-        world: None,
+        triangle_lights: Vec::new(),
+        distant_lights: Vec::new(),
         camera: Camera::from_node(Mat4::IDENTITY, 1.0),
         resolution,
         aspect_ratio: None,
@@ -127,10 +114,7 @@ fn material(m: &gltf::Material, images: &[gltf::image::Data]) -> Result<Material
         base_colour,
         metallic: pbr.metallic_factor().clamp(0.0, 1.0),
         roughness: pbr.roughness_factor().clamp(0.0, 1.0),
-        transmission: m
-            .transmission()
-            .map_or(0.0, |t| t.transmission_factor())
-            .clamp(0.0, 1.0),
+        transmission: m.transmission().map_or(0.0, |t| t.transmission_factor()).clamp(0.0, 1.0),
         ior: m.ior().unwrap_or(1.5),
         emission: (emission.max_element() > 0.0).then(|| RgbSpectrum::illuminant(emission)),
         emits_both_sides: true,
@@ -148,13 +132,7 @@ fn texture(image: &gltf::image::Data, factor: Vec3) -> Result<Texture, String> {
             ))
         }
     };
-    Ok(Texture::from_srgb8(
-        image.width as usize,
-        image.height as usize,
-        channels,
-        &image.pixels,
-        factor,
-    ))
+    Ok(Texture::from_srgb8(image.width as usize, image.height as usize, channels, &image.pixels, factor))
 }
 
 fn world(w: &extras::WorldExtras) -> Result<World, String> {
@@ -162,17 +140,12 @@ fn world(w: &extras::WorldExtras) -> Result<World, String> {
         return Err(format!("scene extras `caustic.world.image` ('{image}'): environment images are not supported yet; use `color` and `strength`"));
     }
     let radiance = Vec3::from(w.color) * w.strength;
-    Ok(World {
-        radiance: RgbSpectrum::illuminant(radiance),
-        sphere: Default::default(),
-    })
+    Ok(World { radiance: RgbSpectrum::illuminant(radiance), sphere: Default::default() })
 }
 
 /// Blender's sun angle is the full angular diameter; a delta sun has cos_max = 1.
 fn sun_cos_max(extras: &NodeExtras) -> f32 {
-    extras
-        .sun_angle_deg
-        .map_or(1.0, |deg| (deg.to_radians() / 2.0).cos())
+    extras.sun_angle_deg.map_or(1.0, |deg| (deg.to_radians() / 2.0).cos())
 }
 
 impl Builder<'_> {
@@ -180,8 +153,8 @@ impl Builder<'_> {
     fn visit(&mut self, node: &gltf::Node, parent: Mat4) -> Result<(), String> {
         let world = parent * Mat4::from_cols_array_2d(&node.transform().matrix());
         let name = node.name().unwrap_or("unnamed");
-        let extras: NodeExtras = extras::parse(node.extras())
-            .map_err(|e| format!("node '{name}' extras `caustic`: {e}"))?;
+        let extras: NodeExtras =
+            extras::parse(node.extras()).map_err(|e| format!("node '{name}' extras `caustic`: {e}"))?;
         if let Some(mesh) = node.mesh() {
             self.add_mesh(&mesh, world)?;
         }
@@ -202,9 +175,7 @@ impl Builder<'_> {
 
     fn add_camera(&mut self, camera: &gltf::Camera, world: Mat4, name: &str) -> Result<(), String> {
         if self.camera.is_some() {
-            self.scene.warnings.push(format!(
-                "camera node '{name}' ignored: the first camera is used"
-            ));
+            self.scene.warnings.push(format!("camera node '{name}' ignored: the first camera is used"));
             return Ok(());
         }
         match camera.projection() {
@@ -213,9 +184,9 @@ impl Builder<'_> {
                 self.scene.aspect_ratio = p.aspect_ratio();
                 Ok(())
             }
-            gltf::camera::Projection::Orthographic(_) => {
-                Err(format!("camera node '{name}': orthographic cameras are not supported; use a perspective camera"))
-            }
+            gltf::camera::Projection::Orthographic(_) => Err(format!(
+                "camera node '{name}': orthographic cameras are not supported; use a perspective camera"
+            )),
         }
     }
 
@@ -230,14 +201,8 @@ impl Builder<'_> {
         let position = world.transform_point3(Vec3::ZERO);
         let axis = world.transform_vector3(-Vec3::Z).normalize();
         let light = match light.kind() {
-            Kind::Point => Light::Point {
-                position,
-                intensity: spectrum,
-            },
-            Kind::Spot {
-                inner_cone_angle,
-                outer_cone_angle,
-            } => Light::Spot {
+            Kind::Point => Light::Point { position, intensity: spectrum },
+            Kind::Spot { inner_cone_angle, outer_cone_angle } => Light::Spot {
                 position,
                 axis,
                 intensity: spectrum,
@@ -258,29 +223,15 @@ impl Builder<'_> {
     }
 
     /// An area light becomes one-sided emitting triangles with radiance P / (pi A).
-    fn add_area_light(
-        &mut self,
-        area: &AreaLightExtras,
-        world: Mat4,
-        name: &str,
-    ) -> Result<(), String> {
-        if !(area.size > 0.0
-            && area.power >= 0.0
-            && area.size.is_finite()
-            && area.power.is_finite())
-        {
-            return Err(format!(
-                "node '{name}' area light: size must be positive and power non-negative"
-            ));
+    fn add_area_light(&mut self, area: &AreaLightExtras, world: Mat4, name: &str) -> Result<(), String> {
+        if !(area.size > 0.0 && area.power >= 0.0 && area.size.is_finite() && area.power.is_finite()) {
+            return Err(format!("node '{name}' area light: size must be positive and power non-negative"));
         }
         let triangles: Vec<[Vec3; 3]> = shapes::area_light_triangles(area)
             .into_iter()
             .map(|t| t.map(|v| world.transform_point3(v)))
             .collect();
-        let total_area: f32 = triangles
-            .iter()
-            .map(|[a, b, c]| (*b - *a).cross(*c - *a).length() / 2.0)
-            .sum();
+        let total_area: f32 = triangles.iter().map(|[a, b, c]| (*b - *a).cross(*c - *a).length() / 2.0).sum();
         let radiance = Vec3::from(area.color) * area.power / (std::f32::consts::PI * total_area);
         let material = self.scene.materials.len() as u32;
         self.scene.materials.push(Material {
@@ -291,17 +242,12 @@ impl Builder<'_> {
             ..Material::default_grey()
         });
         for corners in triangles {
-            let normal = (corners[1] - corners[0])
-                .cross(corners[2] - corners[0])
-                .normalize();
+            let normal = (corners[1] - corners[0]).cross(corners[2] - corners[0]).normalize();
             let base = self.scene.positions.len() as u32;
             self.scene.positions.extend(corners);
             self.scene.normals.extend([normal; 3]);
             self.scene.uvs.extend([Vec2::ZERO; 3]);
-            self.scene.triangles.push(TriangleRef {
-                vertices: [base, base + 1, base + 2],
-                material,
-            });
+            self.scene.triangles.push(TriangleRef { vertices: [base, base + 1, base + 2], material });
         }
         Ok(())
     }
@@ -324,29 +270,20 @@ impl Builder<'_> {
                 .ok_or_else(|| format!("mesh '{name}': a primitive has no POSITION attribute"))?
                 .map(|p| world.transform_point3(Vec3::from(p)))
                 .collect();
-            let normals: Option<Vec<Vec3>> = reader.read_normals().map(|n| {
-                n.map(|n| (normal_matrix * Vec3::from(n)).normalize_or_zero())
-                    .collect()
-            });
-            let uvs: Option<Vec<Vec2>> = reader
-                .read_tex_coords(0)
-                .map(|t| t.into_f32().map(Vec2::from).collect());
+            let normals: Option<Vec<Vec3>> = reader
+                .read_normals()
+                .map(|n| n.map(|n| (normal_matrix * Vec3::from(n)).normalize_or_zero()).collect());
+            let uvs: Option<Vec<Vec2>> =
+                reader.read_tex_coords(0).map(|t| t.into_f32().map(Vec2::from).collect());
             let indices: Vec<u32> = match reader.read_indices() {
                 Some(indices) => indices.into_u32().collect(),
                 None => (0..positions.len() as u32).collect(),
             };
-            let material = primitive
-                .material()
-                .index()
-                .map_or(self.material_offset, |i| i as u32);
+            let material = primitive.material().index().map_or(self.material_offset, |i| i as u32);
             let base = self.scene.positions.len() as u32;
             let vertex_count = positions.len();
-            self.scene
-                .normals
-                .extend(normals.unwrap_or_else(|| vec![Vec3::ZERO; vertex_count]));
-            self.scene
-                .uvs
-                .extend(uvs.unwrap_or_else(|| vec![Vec2::ZERO; vertex_count]));
+            self.scene.normals.extend(normals.unwrap_or_else(|| vec![Vec3::ZERO; vertex_count]));
+            self.scene.uvs.extend(uvs.unwrap_or_else(|| vec![Vec2::ZERO; vertex_count]));
             let mut skipped = 0;
             for chunk in indices.chunks_exact(3) {
                 if chunk.iter().any(|&i| i as usize >= vertex_count) {
@@ -362,9 +299,7 @@ impl Builder<'_> {
                 }
                 let [a, b, c] = [chunk[0], chunk[1], chunk[2]].map(|i| base + i);
                 let vertices = if mirrored { [a, c, b] } else { [a, b, c] };
-                self.scene
-                    .triangles
-                    .push(TriangleRef { vertices, material });
+                self.scene.triangles.push(TriangleRef { vertices, material });
             }
             self.scene.positions.extend(positions);
             if skipped > 0 {
@@ -376,36 +311,33 @@ impl Builder<'_> {
 
     /// Emitting triangles become lights, distant lights learn the scene's bounds.
     fn finish(mut self, world: Option<World>) -> Result<Scene, String> {
-        self.scene.camera = self
-            .camera
-            .ok_or("the scene has no camera: add a perspective camera")?;
-        let sphere = self.scene.bounding_sphere();
+        let scene = &mut self.scene;
+        scene.camera = self.camera.ok_or("the scene has no camera: add a perspective camera")?;
+        let sphere = scene.bounding_sphere();
         for &i in &self.suns {
-            if let Light::Sun { sphere: s, .. } = &mut self.scene.lights[i] {
+            if let Light::Sun { sphere: s, cos_max, .. } = &mut scene.lights[i] {
                 *s = sphere;
+                if *cos_max < 1.0 {
+                    scene.distant_lights.push(i);
+                }
             }
         }
-        let corners = self.scene.triangle_corners();
-        for (t, corners) in self.scene.triangles.iter().zip(corners) {
-            let material = &self.scene.materials[t.material as usize];
+        scene.triangle_lights = vec![NOT_A_LIGHT; scene.triangles.len()];
+        for (i, (t, corners)) in scene.triangles.iter().zip(scene.triangle_corners()).enumerate() {
+            let material = &scene.materials[t.material as usize];
             if let Some(radiance) = material.emission {
                 let both_sides = material.emits_both_sides;
-                self.scene.lights.push(Light::Triangle {
-                    corners,
-                    radiance,
-                    both_sides,
-                });
+                scene.triangle_lights[i] = scene.lights.len() as u32;
+                scene.lights.push(Light::Triangle { corners, radiance, both_sides });
             }
         }
         if let Some(mut world) = world {
             world.sphere = sphere;
-            self.scene.lights.push(Light::World(world.clone()));
-            self.scene.world = Some(world);
+            scene.distant_lights.push(scene.lights.len());
+            scene.lights.push(Light::World(world));
         }
-        if self.scene.lights.iter().all(|l| l.power() <= 0.0) {
-            self.scene
-                .warnings
-                .push("the scene has no light: the image will be black".into());
+        if scene.lights.iter().all(|l| l.power() <= 0.0) {
+            scene.warnings.push("the scene has no light: the image will be black".into());
         }
         Ok(self.scene)
     }

@@ -13,7 +13,7 @@ use std::path::{Path, PathBuf};
 use glam::{Vec2, Vec3};
 
 use crate::camera::Camera;
-use crate::lights::{BoundingSphere, Light, World};
+use crate::lights::{BoundingSphere, Light};
 use crate::materials::{Material, ShadingFrame};
 
 /// A scene that cannot be loaded: the file and what is wrong with it.
@@ -50,8 +50,10 @@ pub struct Scene {
     pub materials: Vec<Material>,
     /// Every light, emitting triangles included.
     pub lights: Vec<Light>,
-    /// The world seen by rays that leave the scene (also in `lights`).
-    pub world: Option<World>,
+    /// For each triangle, the index in `lights` of its emitter, or [`NOT_A_LIGHT`].
+    pub triangle_lights: Vec<u32>,
+    /// Indices in `lights` of the distant lights a ray leaving the scene can see.
+    pub distant_lights: Vec<usize>,
     /// The camera.
     pub camera: Camera,
     /// The resolution the scene asks for, if it does.
@@ -61,6 +63,9 @@ pub struct Scene {
     /// What was skipped or assumed while loading, for the user.
     pub warnings: Vec<String>,
 }
+
+/// The entry of `Scene::triangle_lights` for triangles that emit nothing.
+pub const NOT_A_LIGHT: u32 = u32::MAX;
 
 /// A point on a surface, ready for shading.
 #[derive(Clone, Copy, Debug)]
@@ -83,10 +88,7 @@ impl Scene {
 
     /// The corners of every triangle, in triangle order.
     pub fn triangle_corners(&self) -> Vec<[Vec3; 3]> {
-        self.triangles
-            .iter()
-            .map(|t| t.vertices.map(|v| self.positions[v as usize]))
-            .collect()
+        self.triangles.iter().map(|t| t.vertices.map(|v| self.positions[v as usize])).collect()
     }
 
     /// The surface at barycentric coordinates `b` (weights of corners 1 and 2) of `triangle`.
@@ -102,30 +104,21 @@ impl Scene {
         let n = interpolate(&self.normals).normalize_or_zero();
         let n = if n == Vec3::ZERO { ng } else { n };
         let uv = self.uvs[i0] * w[0] + self.uvs[i1] * w[1] + self.uvs[i2] * w[2];
-        Surface {
-            p,
-            frame: ShadingFrame { n, ng },
-            uv,
-            material: t.material,
-        }
+        Surface { p, frame: ShadingFrame { n, ng }, uv, material: t.material }
+    }
+
+    /// Radiance that a ray of direction `dir` receives when it leaves the scene.
+    pub fn escaped_radiance(&self, dir: Vec3, lambda_nm: f32) -> f32 {
+        self.distant_lights.iter().map(|&i| self.lights[i].escaped_radiance(dir, lambda_nm)).sum()
     }
 
     /// The sphere around every triangle (radius 1 at the origin for an empty scene).
     pub fn bounding_sphere(&self) -> BoundingSphere {
         if self.positions.is_empty() {
-            return BoundingSphere {
-                centre: Vec3::ZERO,
-                radius: 1.0,
-            };
+            return BoundingSphere { centre: Vec3::ZERO, radius: 1.0 };
         }
         let min = self.positions.iter().fold(Vec3::INFINITY, |a, &p| a.min(p));
-        let max = self
-            .positions
-            .iter()
-            .fold(Vec3::NEG_INFINITY, |a, &p| a.max(p));
-        BoundingSphere {
-            centre: (min + max) / 2.0,
-            radius: ((max - min).length() / 2.0).max(1e-6),
-        }
+        let max = self.positions.iter().fold(Vec3::NEG_INFINITY, |a, &p| a.max(p));
+        BoundingSphere { centre: (min + max) / 2.0, radius: ((max - min).length() / 2.0).max(1e-6) }
     }
 }

@@ -9,5 +9,5 @@ pub mod tables;
 pub mod wavelength;
 
 pub use rgb::RgbSpectrum;
-pub use tables::{cmf, d65, xyz_to_linear_rec709};
+pub use tables::{cmf, d65, d65_xyz, xyz_to_linear_rec709};
 pub use wavelength::{sample_visible_wavelength, visible_wavelength_pdf};

@@ -37,10 +37,7 @@ fn inverse_sigmoid(s: f64) -> f64 {
 impl RgbSpectrum {
     /// A constant spectrum of value `value`.
     pub fn constant(value: f32) -> Self {
-        RgbSpectrum {
-            coefficients: [0.0, 0.0, f32::INFINITY],
-            scale: value,
-        }
+        RgbSpectrum { coefficients: [0.0, 0.0, f32::INFINITY], scale: value }
     }
 
     /// A reflectance whose colour under D65 is `rgb` (linear Rec.709, clamped to [0, 1]).
@@ -49,10 +46,7 @@ impl RgbSpectrum {
         if rgb.max_element() - rgb.min_element() < 1e-6 {
             return Self::constant(rgb.x);
         }
-        RgbSpectrum {
-            coefficients: fit_coefficients(rgb.as_dvec3()),
-            scale: 1.0,
-        }
+        RgbSpectrum { coefficients: fit_coefficients(rgb.as_dvec3()), scale: 1.0 }
     }
 
     /// The spectral shape of a light of colour `rgb` (linear Rec.709, non-negative); multiply by
@@ -64,10 +58,7 @@ impl RgbSpectrum {
             return Self::constant(max);
         }
         let shape = Self::reflectance(rgb / (2.0 * max));
-        RgbSpectrum {
-            scale: 2.0 * max,
-            ..shape
-        }
+        RgbSpectrum { scale: 2.0 * max, ..shape }
     }
 
     /// The spectrum's value at `lambda_nm`.
@@ -82,16 +73,12 @@ impl RgbSpectrum {
 
     /// The luminance Y of the spectrum times D65 (1 for a constant spectrum of 1).
     pub fn luminance(&self) -> f64 {
-        table_wavelengths()
-            .map(|l| f64::from(self.eval(l) * d65(l) * cmf(l).y))
-            .sum()
+        table_wavelengths().map(|l| f64::from(self.eval(l) * d65(l) * cmf(l).y)).sum()
     }
 
     /// The largest value the spectrum takes.
     pub fn max_value(&self) -> f32 {
-        table_wavelengths()
-            .map(|l| self.eval(l))
-            .fold(0.0, f32::max)
+        table_wavelengths().map(|l| self.eval(l)).fold(0.0, f32::max)
     }
 }
 
@@ -144,9 +131,8 @@ fn fit_coefficients(target: DVec3) -> [f32; 3] {
 
 /// The linear Rec.709 colour of `spectrum` times D65 (what a white light reflects off it).
 pub fn colour_under_d65(spectrum: &RgbSpectrum) -> Vec3 {
-    let xyz: DVec3 = table_wavelengths()
-        .map(|l| cmf(l).as_dvec3() * f64::from(d65(l) * spectrum.eval(l)))
-        .sum();
+    let xyz: DVec3 =
+        table_wavelengths().map(|l| cmf(l).as_dvec3() * f64::from(d65(l) * spectrum.eval(l))).sum();
     xyz_to_linear_rec709(xyz).as_vec3()
 }
 
@@ -165,10 +151,7 @@ mod tests {
         ] {
             let s = RgbSpectrum::reflectance(rgb);
             let back = colour_under_d65(&s);
-            assert!(
-                (back - rgb).abs().max_element() < 2e-3,
-                "{rgb} came back as {back}"
-            );
+            assert!((back - rgb).abs().max_element() < 2e-3, "{rgb} came back as {back}");
             assert!(s.max_value() <= 1.0);
             assert!(table_wavelengths().all(|l| s.eval(l) >= 0.0));
         }

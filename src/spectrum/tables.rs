@@ -20,11 +20,7 @@ fn lookup(table: &[f32], lambda_nm: f32) -> f32 {
 
 /// The CIE 1931 2-degree colour-matching functions (x-bar, y-bar, z-bar) at `lambda_nm`.
 pub fn cmf(lambda_nm: f32) -> Vec3 {
-    Vec3::new(
-        lookup(&CIE_X, lambda_nm),
-        lookup(&CIE_Y, lambda_nm),
-        lookup(&CIE_Z, lambda_nm),
-    )
+    Vec3::new(lookup(&CIE_X, lambda_nm), lookup(&CIE_Y, lambda_nm), lookup(&CIE_Z, lambda_nm))
 }
 
 /// CIE illuminant D65 at `lambda_nm`, normalised to luminance 1.
@@ -42,6 +38,11 @@ pub fn xyz_to_linear_rec709(xyz: DVec3) -> DVec3 {
     )
 }
 
+/// The XYZ of the normalised D65 (its integral against the colour-matching functions).
+pub fn d65_xyz() -> DVec3 {
+    table_wavelengths().map(|l| (cmf(l) * d65(l)).as_dvec3()).sum()
+}
+
 /// The wavelengths of the baked tables, one per nanometre.
 pub fn table_wavelengths() -> impl Iterator<Item = f32> {
     (0..CIE_Y.len()).map(|i| LAMBDA_MIN_NM + i as f32)
@@ -53,9 +54,7 @@ mod tests {
 
     #[test]
     fn d65_is_white_with_luminance_one() {
-        let xyz: DVec3 = table_wavelengths()
-            .map(|l| (cmf(l) * d65(l)).as_dvec3())
-            .sum();
+        let xyz = d65_xyz();
         assert!((xyz.y - 1.0).abs() < 1e-4, "Y = {}", xyz.y);
         let rgb = xyz_to_linear_rec709(xyz);
         assert!((rgb - DVec3::ONE).abs().max_element() < 1e-4, "{rgb}");

@@ -25,9 +25,7 @@ mod tests {
 
     #[test]
     fn density_integrates_to_one_and_matches_samples() {
-        let integral: f32 = (0..47000)
-            .map(|i| visible_wavelength_pdf(360.0 + i as f32 * 0.01) * 0.01)
-            .sum();
+        let integral: f32 = (0..47000).map(|i| visible_wavelength_pdf(360.0 + i as f32 * 0.01) * 0.01).sum();
         assert!((integral - 1.0).abs() < 2e-3, "{integral}");
         // The fraction of uniform u below 0.5 lands below the median of p.
         let (median, _) = sample_visible_wavelength(0.5);

@@ -24,10 +24,7 @@ pub fn gather(eye: &[EyeResult], photons: &[Photon], radius: f32) -> Vec<PixelEs
         .with_min_len(64)
         .map(|e| {
             let Some(vp) = e.point else {
-                return PixelEstimate {
-                    radiance: e.radiance,
-                    laplacian: 0.0,
-                };
+                return PixelEstimate { radiance: e.radiance, laplacian: 0.0 };
             };
             let (mut sum, mut laplacian) = (0.0f32, 0.0f32);
             grid.for_each_near(vp.p, |i| {
@@ -41,10 +38,7 @@ pub fn gather(eye: &[EyeResult], photons: &[Photon], radius: f32) -> Vec<PixelEs
                 sum += weighted * kernel_scale * (1.0 - t2) * (1.0 - t2);
                 laplacian += weighted * laplacian_scale * (1.0 - 2.0 * t2);
             });
-            PixelEstimate {
-                radiance: e.radiance + vp.beta * sum,
-                laplacian: vp.beta * laplacian,
-            }
+            PixelEstimate { radiance: e.radiance + vp.beta * sum, laplacian: vp.beta * laplacian }
         })
         .collect()
 }

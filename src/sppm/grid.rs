@@ -40,11 +40,7 @@ impl PhotonGrid {
             photon_indices[next[b] as usize] = i as u32;
             next[b] += 1;
         }
-        PhotonGrid {
-            cell_size,
-            bucket_start,
-            photon_indices,
-        }
+        PhotonGrid { cell_size, bucket_start, photon_indices }
     }
 
     /// Calls `visit` with every photon index whose cell is within the 2 x 2 x 2 block around `p`
@@ -53,10 +49,7 @@ impl PhotonGrid {
         let buckets = self.bucket_start.len() - 1;
         let base = (p / self.cell_size - 0.5).floor().as_ivec3();
         let mut seen = [usize::MAX; 8];
-        for (k, offset) in (0..8)
-            .map(|k| IVec3::new(k & 1, (k >> 1) & 1, k >> 2))
-            .enumerate()
-        {
+        for (k, offset) in (0..8).map(|k| IVec3::new(k & 1, (k >> 1) & 1, k >> 2)).enumerate() {
             let b = hash_cell(base + offset, buckets);
             if seen[..k].contains(&b) {
                 continue;
@@ -77,21 +70,11 @@ mod tests {
     #[test]
     fn finds_every_photon_within_the_radius() {
         let points: Vec<Vec3> = (0..2000)
-            .map(|i| {
-                Vec3::new(
-                    (i * 37 % 101) as f32,
-                    (i * 53 % 89) as f32,
-                    (i * 11 % 97) as f32,
-                ) * 0.01
-            })
+            .map(|i| Vec3::new((i * 37 % 101) as f32, (i * 53 % 89) as f32, (i * 11 % 97) as f32) * 0.01)
             .collect();
         let radius = 0.07;
         let grid = PhotonGrid::build(points.iter().copied(), points.len(), radius);
-        for q in [
-            Vec3::splat(0.3),
-            Vec3::new(0.05, 0.8, 0.41),
-            Vec3::new(-0.02, 0.0, 0.9),
-        ] {
+        for q in [Vec3::splat(0.3), Vec3::new(0.05, 0.8, 0.41), Vec3::new(-0.02, 0.0, 0.9)] {
             let mut found = Vec::new();
             grid.for_each_near(q, |i| {
                 if points[i].distance(q) < radius {
@@ -99,9 +82,8 @@ mod tests {
                 }
             });
             found.sort();
-            let expected: Vec<usize> = (0..points.len())
-                .filter(|&i| points[i].distance(q) < radius)
-                .collect();
+            let expected: Vec<usize> =
+                (0..points.len()).filter(|&i| points[i].distance(q) < radius).collect();
             assert_eq!(found, expected);
         }
     }

@@ -101,12 +101,7 @@ impl<'a> Renderer<'a> {
     /// A renderer for `scene`; lights are chosen in proportion to their power.
     pub fn new(scene: &'a Scene, accel: &'a Accel, settings: SppmSettings) -> Self {
         let light_choice = Distribution1D::new(scene.lights.iter().map(Light::power));
-        Renderer {
-            scene,
-            accel,
-            light_choice,
-            settings,
-        }
+        Renderer { scene, accel, light_choice, settings }
     }
 
     /// The settings.
@@ -116,17 +111,10 @@ impl<'a> Renderer<'a> {
 
     /// The wavelength and radius of pass `index` (0-based).
     pub fn pass_samples(&self, index: u64) -> PassSamples {
-        let (lambda_nm, lambda_pdf) =
-            sample_visible_wavelength(pass_sample(self.settings.seed, index));
+        let (lambda_nm, lambda_pdf) = sample_visible_wavelength(pass_sample(self.settings.seed, index));
         let r1_squared = self.settings.initial_radius * self.settings.initial_radius;
-        let radius =
-            radius::radius_squared(r1_squared, self.settings.alpha, index + 1).sqrt() as f32;
-        PassSamples {
-            index,
-            lambda_nm,
-            lambda_pdf,
-            radius,
-        }
+        let radius = radius::radius_squared(r1_squared, self.settings.alpha, index + 1).sqrt() as f32;
+        PassSamples { index, lambda_nm, lambda_pdf, radius }
     }
 
     /// Renders pass `index`: one estimate per pixel, in row-major order.
@@ -146,9 +134,7 @@ impl<'a> Renderer<'a> {
             .with_min_len(64)
             .map(|pixel| visible::trace_eye_path(self, pass, pixel))
             .collect();
-        let stats = results
-            .iter()
-            .fold(PassStats::default(), |a, (_, s)| a + *s);
+        let stats = results.iter().fold(PassStats::default(), |a, (_, s)| a + *s);
         (results.into_iter().map(|(r, _)| r).collect(), stats)
     }
 
@@ -174,11 +160,7 @@ impl<'a> Renderer<'a> {
     /// Whether nothing blocks the segment from `p` (normal `ng`) along `wi` for `distance`.
     fn unoccluded(&self, p: Vec3, ng: Vec3, wi: Vec3, distance: f32) -> bool {
         let origin = crate::accel::offset_origin(p, ng, wi);
-        let t_max = if distance.is_finite() {
-            distance * (1.0 - 1e-4)
-        } else {
-            f32::INFINITY
-        };
+        let t_max = if distance.is_finite() { distance * (1.0 - 1e-4) } else { f32::INFINITY };
         !self.accel.occluded(origin, wi, t_max)
     }
 }

@@ -23,21 +23,14 @@ pub struct Photon {
 }
 
 /// Traces photon path `k` of `pass`, appending what it stores to `out`.
-pub fn trace_photon(
-    renderer: &Renderer,
-    pass: &PassSamples,
-    k: u64,
-    out: &mut Vec<Photon>,
-) -> PassStats {
+pub fn trace_photon(renderer: &Renderer, pass: &PassSamples, k: u64, out: &mut Vec<Photon>) -> PassStats {
     let scene = renderer.scene;
     let mut rng = stream(renderer.settings.seed, Stream::Photon, pass.index, k);
     let mut stats = PassStats::default();
     let Some((index, p_light)) = renderer.light_choice.sample(rng.next_1d()) else {
         return stats;
     };
-    let Some(emitted) =
-        scene.lights[index].emit_photon(rng.next_2d(), rng.next_2d(), pass.lambda_nm)
-    else {
+    let Some(emitted) = scene.lights[index].emit_photon(rng.next_2d(), rng.next_2d(), pass.lambda_nm) else {
         return stats;
     };
     let mut flux = emitted.flux / (p_light * renderer.settings.photons_per_pass as f32);
@@ -50,31 +43,15 @@ pub fn trace_photon(
         let surface = scene.surface(hit.triangle, hit.barycentric);
         let material = &scene.materials[surface.material as usize];
         let wo = -direction;
-        let bsdf = material.bsdf(
-            material.reflectance(surface.uv, pass.lambda_nm),
-            rng.next_1d(),
-        );
+        let bsdf = material.bsdf(material.reflectance(surface.uv, pass.lambda_nm), rng.next_1d());
         if !bsdf.is_delta() && depth > 0 {
-            let ng = if surface.frame.ng.dot(wo) < 0.0 {
-                -surface.frame.ng
-            } else {
-                surface.frame.ng
-            };
-            out.push(Photon {
-                p: surface.p,
-                wi: wo,
-                ng,
-                flux,
-            });
+            let ng = if surface.frame.ng.dot(wo) < 0.0 { -surface.frame.ng } else { surface.frame.ng };
+            out.push(Photon { p: surface.p, wi: wo, ng, flux });
             stats.photons_stored += 1;
         }
-        let Some(sample) = bsdf.sample(
-            surface.frame,
-            wo,
-            rng.next_2d(),
-            rng.next_1d(),
-            Transport::Importance,
-        ) else {
+        let Some(sample) =
+            bsdf.sample(surface.frame, wo, rng.next_2d(), rng.next_1d(), Transport::Importance)
+        else {
             break;
         };
         // Russian roulette with the throughput's change as the survival probability keeps the

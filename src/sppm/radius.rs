@@ -11,9 +11,7 @@
 /// The squared radius of pass `i` (1-based) from the first pass's squared radius.
 pub fn radius_squared(r1_squared: f64, alpha: f64, i: u64) -> f64 {
     let i = i.max(1) as f64;
-    let ln = r1_squared.ln() + libm::lgamma(i + alpha)
-        - libm::lgamma(1.0 + alpha)
-        - libm::lgamma(i + 1.0);
+    let ln = r1_squared.ln() + libm::lgamma(i + alpha) - libm::lgamma(1.0 + alpha) - libm::lgamma(i + 1.0);
     ln.exp()
 }
 
@@ -31,10 +29,7 @@ mod tests {
             }
             let expected = 0.25 * product / i as f64;
             let got = radius_squared(0.25, alpha, i);
-            assert!(
-                (got / expected - 1.0).abs() < 1e-9,
-                "pass {i}: {got} vs {expected}"
-            );
+            assert!((got / expected - 1.0).abs() < 1e-9, "pass {i}: {got} vs {expected}");
         }
     }
 
@@ -42,10 +37,7 @@ mod tests {
     fn never_underflows() {
         for alpha in [0.01, 2.0 / 3.0, 0.99] {
             let r2 = radius_squared(1e-6, alpha, 10_000_000);
-            assert!(
-                r2 > 0.0 && r2.is_finite() && (r2 as f32) > 0.0,
-                "alpha {alpha}: {r2}"
-            );
+            assert!(r2 > 0.0 && r2.is_finite() && (r2 as f32) > 0.0, "alpha {alpha}: {r2}");
             assert!(r2 < radius_squared(1e-6, alpha, 9_999_999));
         }
     }

@@ -1,0 +1,272 @@
+//! Helpers shared by the integration tests: render through the library or the binary, read EXRs,
+//! and write small analytic glTF scenes.
+#![allow(dead_code)]
+
+use std::path::{Path, PathBuf};
+use std::process::{Command, Output};
+
+use base64::Engine;
+use caustic::frames::{self, ProgressStyle, RenderSettings};
+use serde_json::{json, Value};
+
+/// The repository's bundled scene `name`.
+pub fn bundled_scene(name: &str) -> PathBuf {
+    Path::new(env!("CARGO_MANIFEST_DIR")).join("scenes").join(name)
+}
+
+/// Settings for a quiet render of `scene` into `out`.
+pub fn settings(scene: &Path, out: &Path, passes: u64) -> RenderSettings {
+    RenderSettings {
+        scene: scene.to_path_buf(),
+        out_dir: out.to_path_buf(),
+        passes: Some(passes),
+        time_budget_s: None,
+        photons: None,
+        alpha: 2.0 / 3.0,
+        radius: None,
+        resolution: None,
+        seed: 1,
+        progress: ProgressStyle::None,
+    }
+}
+
+/// A rendered image: linear Rec.709, row-major from the top-left.
+pub struct Image {
+    pub width: usize,
+    pub height: usize,
+    pub rgb: Vec<[f64; 3]>,
+}
+
+impl Image {
+    /// Mean colour over the pixels `x0..x1`, `y0..y1`.
+    pub fn mean(&self, x0: usize, x1: usize, y0: usize, y1: usize) -> [f64; 3] {
+        let mut sum = [0.0; 3];
+        for y in y0..y1 {
+            for x in x0..x1 {
+                for c in 0..3 {
+                    sum[c] += self.rgb[y * self.width + x][c];
+                }
+            }
+        }
+        sum.map(|s| s / ((x1 - x0) * (y1 - y0)) as f64)
+    }
+
+    /// Mean colour of the whole image.
+    pub fn mean_all(&self) -> [f64; 3] {
+        self.mean(0, self.width, 0, self.height)
+    }
+
+    /// Mean luminance (Rec.709 weights) over a window.
+    pub fn luminance(&self, x0: usize, x1: usize, y0: usize, y1: usize) -> f64 {
+        let [r, g, b] = self.mean(x0, x1, y0, y1);
+        0.2126 * r + 0.7152 * g + 0.0722 * b
+    }
+
+    /// Root-mean-square difference from `other`, over every channel.
+    pub fn rmse(&self, other: &Image) -> f64 {
+        let sum: f64 = self
+            .rgb
+            .iter()
+            .zip(&other.rgb)
+            .map(|(a, b)| (0..3).map(|c| (a[c] - b[c]).powi(2)).sum::<f64>())
+            .sum();
+        (sum / (3 * self.rgb.len()) as f64).sqrt()
+    }
+}
+
+/// Renders with the library on a pool of `threads` workers and returns the image.
+pub fn render(settings: &RenderSettings, threads: usize) -> Image {
+    let pool = rayon::ThreadPoolBuilder::new().num_threads(threads).build().unwrap();
+    let report = pool.install(|| frames::render(settings)).unwrap_or_else(|e| panic!("render failed: {e}"));
+    read_exr(&report.path)
+}
+
+/// Reads `Combined.R/G/B` of an EXR written by Caustic.
+pub fn read_exr(path: &Path) -> Image {
+    use exr::prelude::read_all_flat_layers_from_file;
+    let image = read_all_flat_layers_from_file(path).unwrap_or_else(|e| panic!("{}: {e}", path.display()));
+    let layer = &image.layer_data[0];
+    let size = layer.size;
+    let channel = |name: &str| {
+        let c = layer
+            .channel_data
+            .list
+            .iter()
+            .find(|c| c.name.to_string() == name)
+            .unwrap_or_else(|| panic!("{}: no channel {name}", path.display()));
+        c.sample_data.values_as_f32().collect::<Vec<f32>>()
+    };
+    let (r, g, b) = (channel("Combined.R"), channel("Combined.G"), channel("Combined.B"));
+    let rgb = (0..size.0 * size.1).map(|i| [r[i] as f64, g[i] as f64, b[i] as f64]).collect();
+    Image { width: size.0, height: size.1, rgb }
+}
+
+/// Runs the `caustic` binary with `args`.
+pub fn run_caustic(args: &[&str]) -> Output {
+    Command::new(env!("CARGO_BIN_EXE_caustic")).args(args).output().expect("run caustic")
+}
+
+/// A minimal glTF 2.0 document built in memory, for scenes with analytic answers.
+#[derive(Default)]
+pub struct GltfBuilder {
+    buffer: Vec<u8>,
+    accessors: Vec<Value>,
+    buffer_views: Vec<Value>,
+    meshes: Vec<Value>,
+    materials: Vec<Value>,
+    nodes: Vec<Value>,
+    cameras: Vec<Value>,
+    lights: Vec<Value>,
+    scene_extras: Option<Value>,
+}
+
+/// The quaternion (x, y, z, w) that turns local -z (where cameras and lights point) to `dir`.
+pub fn look_rotation(dir: [f32; 3]) -> [f32; 4] {
+    let q = glam::Quat::from_rotation_arc(-glam::Vec3::Z, glam::Vec3::from(dir).normalize());
+    q.to_array()
+}
+
+impl GltfBuilder {
+    fn add_accessor(&mut self, data: &[f32], components: usize, kind: &str) -> usize {
+        let offset = self.buffer.len();
+        for v in data {
+            self.buffer.extend_from_slice(&v.to_le_bytes());
+        }
+        self.buffer_views.push(json!({"buffer": 0, "byteOffset": offset, "byteLength": data.len() * 4}));
+        let count = data.len() / components;
+        let mut accessor = json!({"bufferView": self.buffer_views.len() - 1, "componentType": 5126, "count": count, "type": kind});
+        if kind == "VEC3" {
+            let mut min = [f32::INFINITY; 3];
+            let mut max = [f32::NEG_INFINITY; 3];
+            for p in data.chunks(3) {
+                for k in 0..3 {
+                    min[k] = min[k].min(p[k]);
+                    max[k] = max[k].max(p[k]);
+                }
+            }
+            accessor["min"] = json!(min);
+            accessor["max"] = json!(max);
+        }
+        self.accessors.push(accessor);
+        self.accessors.len() - 1
+    }
+
+    /// Adds a material (a glTF material object) and returns its index.
+    pub fn material(&mut self, material: Value) -> usize {
+        self.materials.push(material);
+        self.materials.len() - 1
+    }
+
+    /// Adds a non-indexed triangle mesh (flat normals) with `material`.
+    pub fn mesh(&mut self, name: &str, triangles: &[[[f32; 3]; 3]], material: usize) {
+        let mut positions = Vec::new();
+        let mut normals = Vec::new();
+        for t in triangles {
+            let [a, b, c] = t.map(glam::Vec3::from);
+            let n = (b - a).cross(c - a).normalize();
+            for v in [a, b, c] {
+                positions.extend(v.to_array());
+                normals.extend(n.to_array());
+            }
+        }
+        let position = self.add_accessor(&positions, 3, "VEC3");
+        let normal = self.add_accessor(&normals, 3, "VEC3");
+        self.meshes.push(json!({"name": name, "primitives": [{"attributes": {"POSITION": position, "NORMAL": normal}, "material": material}]}));
+        self.nodes.push(json!({"name": name, "mesh": self.meshes.len() - 1}));
+    }
+
+    /// Adds an axis-aligned quad at height `y` spanning `[-half, half]` in x and z, facing `+y`
+    /// (or `-y` when `up` is false).
+    pub fn quad_y(&mut self, name: &str, y: f32, half: f32, up: bool, material: usize) {
+        let [a, b, c, d] = [[-half, y, -half], [-half, y, half], [half, y, half], [half, y, -half]];
+        let triangles = if up { [[a, b, c], [a, c, d]] } else { [[a, c, b], [a, d, c]] };
+        self.mesh(name, &triangles, material);
+    }
+
+    /// Adds a perspective camera at `position` looking along `dir`.
+    pub fn camera(&mut self, position: [f32; 3], dir: [f32; 3], yfov: f32) {
+        self.cameras.push(
+            json!({"type": "perspective", "perspective": {"yfov": yfov, "znear": 0.01, "aspectRatio": 1.0}}),
+        );
+        self.nodes.push(json!({"name": "Camera", "camera": self.cameras.len() - 1, "translation": position, "rotation": look_rotation(dir)}));
+    }
+
+    /// Adds a `KHR_lights_punctual` light (a light object) at `position` pointing along `dir`.
+    pub fn light(&mut self, light: Value, position: [f32; 3], dir: [f32; 3]) {
+        self.lights.push(light);
+        self.nodes.push(json!({
+            "name": format!("Light{}", self.lights.len()),
+            "translation": position,
+            "rotation": look_rotation(dir),
+            "extensions": {"KHR_lights_punctual": {"light": self.lights.len() - 1}}
+        }));
+    }
+
+    /// Adds a node with `caustic` extras (for example an area light) at `position` pointing along `dir`.
+    pub fn extras_node(&mut self, name: &str, caustic: Value, position: [f32; 3], dir: [f32; 3]) {
+        self.nodes.push(json!({"name": name, "translation": position, "rotation": look_rotation(dir), "extras": {"caustic": caustic}}));
+    }
+
+    /// Sets the scene's `caustic` extras.
+    pub fn scene_extras(&mut self, caustic: Value) {
+        self.scene_extras = Some(json!({"caustic": caustic}));
+    }
+
+    /// The glTF JSON, with the buffer embedded as a data URI.
+    pub fn to_json(&self) -> Value {
+        let uri = format!(
+            "data:application/octet-stream;base64,{}",
+            base64::engine::general_purpose::STANDARD.encode(&self.buffer)
+        );
+        let mut doc = json!({
+            "asset": {"version": "2.0", "generator": "caustic tests"},
+            "scene": 0,
+            "scenes": [{"nodes": (0..self.nodes.len()).collect::<Vec<_>>()}],
+            "nodes": self.nodes,
+            "meshes": self.meshes,
+            "materials": self.materials,
+            "accessors": self.accessors,
+            "bufferViews": self.buffer_views,
+            "buffers": [{"byteLength": self.buffer.len(), "uri": uri}],
+            "cameras": self.cameras,
+        });
+        if !self.lights.is_empty() {
+            doc["extensionsUsed"] = json!(["KHR_lights_punctual"]);
+            doc["extensions"] = json!({"KHR_lights_punctual": {"lights": self.lights}});
+        }
+        if let Some(extras) = &self.scene_extras {
+            doc["scenes"][0]["extras"] = extras.clone();
+        }
+        doc
+    }
+
+    /// Writes the scene to `dir/name.gltf` and returns the path.
+    pub fn write(&self, dir: &Path, name: &str) -> PathBuf {
+        let path = dir.join(format!("{name}.gltf"));
+        std::fs::write(&path, serde_json::to_string_pretty(&self.to_json()).unwrap()).unwrap();
+        path
+    }
+}
+
+/// A Lambertian glTF material of linear colour `rgb` (no specular layer).
+pub fn diffuse(rgb: [f32; 3]) -> Value {
+    json!({"pbrMetallicRoughness": {"baseColorFactor": [rgb[0], rgb[1], rgb[2], 1.0], "metallicFactor": 0.0, "roughnessFactor": 1.0}})
+}
+
+/// Loads a `.gltf` file as JSON, for tests that edit a bundled scene.
+pub fn load_json(path: &Path) -> Value {
+    serde_json::from_str(&std::fs::read_to_string(path).unwrap()).unwrap()
+}
+
+/// Writes an edited copy of a bundled `.gltf` scene (and its `.bin`) into `dir`.
+pub fn write_edited(original: &Path, dir: &Path, edit: impl FnOnce(&mut Value)) -> PathBuf {
+    let mut doc = load_json(original);
+    edit(&mut doc);
+    for buffer in doc["buffers"].as_array().unwrap() {
+        let uri = buffer["uri"].as_str().unwrap();
+        std::fs::copy(original.parent().unwrap().join(uri), dir.join(uri)).unwrap();
+    }
+    let path = dir.join(original.file_name().unwrap());
+    std::fs::write(&path, serde_json::to_string(&doc).unwrap()).unwrap();
+    path
+}
