@@ -21,6 +21,7 @@ pub mod camera;
 pub mod cli;
 pub mod film;
 pub mod frames;
+pub mod geometry;
 pub mod lights;
 pub mod materials;
 pub mod sampling;

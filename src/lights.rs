@@ -13,6 +13,7 @@
 use glam::{Vec2, Vec3};
 use std::f32::consts::PI;
 
+use crate::geometry::offset_origin;
 use crate::sampling::{
     basis, square_to_cone, square_to_cosine_hemisphere, square_to_disc, square_to_sphere, square_to_triangle,
 };
@@ -292,9 +293,10 @@ impl Light {
                 }
                 let (t, b) = basis(n);
                 let local = square_to_cosine_hemisphere(u);
+                let direction = (t * local.x + b * local.y + n * local.z).normalize();
                 EmittedPhoton {
-                    origin: point_in_triangle(corners, u_position),
-                    direction: (t * local.x + b * local.y + n * local.z).normalize(),
+                    origin: offset_origin(point_in_triangle(corners, u_position), n, direction),
+                    direction,
                     flux: spectral(radiance, lambda_nm) * PI * triangle_area(corners) * sides,
                 }
             }

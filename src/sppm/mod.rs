@@ -159,7 +159,7 @@ impl<'a> Renderer<'a> {
 
     /// Whether nothing blocks the segment from `p` (normal `ng`) along `wi` for `distance`.
     fn unoccluded(&self, p: Vec3, ng: Vec3, wi: Vec3, distance: f32) -> bool {
-        let origin = crate::accel::offset_origin(p, ng, wi);
+        let origin = crate::geometry::offset_origin(p, ng, wi);
         let t_max = if distance.is_finite() { distance * (1.0 - 1e-4) } else { f32::INFINITY };
         !self.accel.occluded(origin, wi, t_max)
     }

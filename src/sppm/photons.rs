@@ -5,7 +5,7 @@
 use glam::Vec3;
 
 use super::{PassSamples, PassStats, Renderer, MAX_DEPTH};
-use crate::accel::offset_origin;
+use crate::geometry::offset_origin;
 use crate::materials::Transport;
 use crate::sampling::{stream, Stream};
 

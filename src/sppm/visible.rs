@@ -5,7 +5,7 @@
 use glam::{Vec2, Vec3};
 
 use super::{PassSamples, PassStats, Renderer, MAX_DEPTH};
-use crate::accel::offset_origin;
+use crate::geometry::offset_origin;
 use crate::materials::{Bsdf, ShadingFrame, Transport};
 use crate::sampling::{stream, Sampler, Stream};
 use crate::scene::NOT_A_LIGHT;
