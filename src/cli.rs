@@ -34,19 +34,19 @@ pub struct RenderArgs {
     #[arg(short, long = "out", default_value = "renders")]
     out: PathBuf,
     /// Number of passes (default 64 unless --time-budget is given).
-    #[arg(long, value_parser = clap::value_parser!(u64).range(1..))]
+    #[arg(long, value_parser = at_least_one)]
     passes: Option<u64>,
     /// Stop after the pass that ends past this many seconds.
-    #[arg(long, value_parser = positive_f64)]
+    #[arg(long, allow_negative_numbers = true, value_parser = positive_f64)]
     time_budget: Option<f64>,
     /// Photon paths per pass (default: one per pixel).
-    #[arg(long, value_parser = clap::value_parser!(u64).range(1..))]
+    #[arg(long, value_parser = at_least_one)]
     photons: Option<u64>,
     /// Radius reduction alpha of Knaus & Zwicker, in (0, 1).
-    #[arg(long, default_value_t = 2.0 / 3.0, value_parser = unit_interval)]
+    #[arg(long, default_value_t = 2.0 / 3.0, allow_negative_numbers = true, value_parser = unit_interval)]
     alpha: f64,
     /// First-pass gather radius in scene units (default: 1% of the scene's bounding diameter).
-    #[arg(long, value_parser = positive_f64)]
+    #[arg(long, allow_negative_numbers = true, value_parser = positive_f64)]
     radius: Option<f64>,
     /// Image size WxH (default: the scene's, else 640 wide at the camera's aspect).
     #[arg(long, value_parser = parse_resolution)]
@@ -54,8 +54,8 @@ pub struct RenderArgs {
     /// Random seed: the same seed gives the same image with any thread count.
     #[arg(long, default_value_t = 1)]
     seed: u64,
-    /// Worker threads (default: all cores).
-    #[arg(long, value_parser = clap::value_parser!(u64).range(1..=1024))]
+    /// Worker threads, 1 to 256 (default: all cores).
+    #[arg(long, value_parser = thread_count)]
     threads: Option<u64>,
     /// Progress display: a bar on the terminal, JSON lines on stdout, or none.
     #[arg(long, value_enum, default_value_t = ProgressStyle::Bar)]
@@ -71,8 +71,22 @@ pub struct BenchArgs {
     #[arg(long, default_value = "640x360", value_parser = parse_resolution)]
     resolution: [u32; 2],
     /// Passes per measurement.
-    #[arg(long, default_value_t = 8, value_parser = clap::value_parser!(u64).range(1..))]
+    #[arg(long, default_value_t = 8, value_parser = at_least_one)]
     passes: u64,
+}
+
+fn at_least_one(s: &str) -> Result<u64, String> {
+    match s.parse::<u64>() {
+        Ok(v) if v >= 1 => Ok(v),
+        _ => Err(format!("expected a whole number of at least 1, got '{s}'")),
+    }
+}
+
+fn thread_count(s: &str) -> Result<u64, String> {
+    match s.parse::<u64>() {
+        Ok(v) if (1..=256).contains(&v) => Ok(v),
+        _ => Err(format!("expected a whole number from 1 to 256, got '{s}'")),
+    }
 }
 
 fn positive_f64(s: &str) -> Result<f64, String> {

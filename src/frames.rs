@@ -100,9 +100,29 @@ pub fn sppm_settings(settings: &RenderSettings, scene: &Scene) -> SppmSettings {
     }
 }
 
+/// Memory a pixel needs while rendering (sums, eye result, estimate), in bytes, generously.
+const BYTES_PER_PIXEL: u64 = 256;
+
+/// The largest image memory Caustic will try to allocate, in bytes.
+const MAX_IMAGE_BYTES: u64 = 16 << 30;
+
+/// Refuses resolutions whose buffers would not fit in memory, before anything is allocated.
+fn check_resolution([width, height]: [u32; 2]) -> Result<(), String> {
+    let bytes = u64::from(width) * u64::from(height) * BYTES_PER_PIXEL;
+    if bytes > MAX_IMAGE_BYTES {
+        return Err(format!(
+            "resolution {width}x{height} would need about {} GiB of image buffers (at most {} GiB)",
+            bytes >> 30,
+            MAX_IMAGE_BYTES >> 30
+        ));
+    }
+    Ok(())
+}
+
 /// Renders frame 1 of the scene and writes `OUT/frame_0001.exr`.
 pub fn render(settings: &RenderSettings) -> Result<FrameReport, String> {
     let scene = load_scene(settings)?;
+    check_resolution(resolution(settings, &scene))?;
     let accel = Accel::build(&scene.triangle_corners());
     let renderer = Renderer::new(&scene, &accel, sppm_settings(settings, &scene));
     std::fs::create_dir_all(&settings.out_dir)
