@@ -5,7 +5,7 @@
 
 use glam::Vec3;
 
-use super::{conductor::reflect, BsdfSample, Transport};
+use super::{conductor::reflect, face_toward, BsdfSample, ShadingFrame, Transport};
 
 /// Unpolarised Fresnel reflectance for `cos_i` (cosine on the incident side) and relative index
 /// `eta` (transmitted over incident).
@@ -21,10 +21,13 @@ pub fn fresnel_dielectric(cos_i: f32, eta: f32) -> f32 {
     (r_parallel * r_parallel + r_perpendicular * r_perpendicular) / 2.0
 }
 
-/// Reflects or refracts `wo` at a boundary of geometric normal `ng` (pointing outside).
-pub fn sample(ior: f32, ng: Vec3, wo: Vec3, u: f32, mode: Transport) -> Option<BsdfSample> {
-    let entering = ng.dot(wo) > 0.0;
-    let (n, eta) = if entering { (ng, ior) } else { (-ng, 1.0 / ior) };
+/// Reflects or refracts `wo` at a boundary with normals `frame`: the geometric normal (pointing
+/// outside) decides which side `wo` is on, the shading normal bends the ray, so a tessellated
+/// sphere focuses light like a smooth one.
+pub fn sample(ior: f32, frame: ShadingFrame, wo: Vec3, u: f32, mode: Transport) -> Option<BsdfSample> {
+    let outward = face_toward(frame.n, frame.ng);
+    let entering = frame.ng.dot(wo) > 0.0;
+    let (n, eta) = if entering { (outward, ior) } else { (-outward, 1.0 / ior) };
     let cos_i = n.dot(wo).min(1.0);
     let f = fresnel_dielectric(cos_i, eta);
     if u < f {
@@ -54,7 +57,8 @@ mod tests {
     #[test]
     fn refraction_obeys_snell() {
         let wo = Vec3::new(0.6, 0.0, 0.8);
-        let s = sample(1.5, Vec3::Z, wo, 0.99, Transport::Importance).unwrap();
+        let frame = ShadingFrame { n: Vec3::Z, ng: Vec3::Z };
+        let s = sample(1.5, frame, wo, 0.99, Transport::Importance).unwrap();
         let sin_t = (1.0 - s.wi.z * s.wi.z).sqrt();
         assert!((sin_t * 1.5 - 0.6).abs() < 1e-5);
         assert!(s.wi.z < 0.0 && s.wi.x < 0.0);

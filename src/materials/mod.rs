@@ -193,12 +193,12 @@ impl Bsdf {
         u_lobe: f32,
         mode: Transport,
     ) -> Option<BsdfSample> {
-        let ShadingFrame { n, ng } = frame;
+        let n = frame.n;
         match *self {
             Bsdf::Diffuse { albedo } => diffuse::sample(albedo, n, wo, u),
             Bsdf::Conductor { f0 } => conductor::sample_smooth(f0, n, wo),
             Bsdf::RoughConductor { f0, alpha } => conductor::sample_rough(f0, alpha, n, wo, u),
-            Bsdf::Dielectric { ior } => dielectric::sample(ior, ng, wo, u_lobe, mode),
+            Bsdf::Dielectric { ior } => dielectric::sample(ior, frame, wo, u_lobe, mode),
             Bsdf::Black => None,
         }
     }
