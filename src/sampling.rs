@@ -139,10 +139,61 @@ impl Distribution1D {
         Some((i, self.probability(i)))
     }
 
+    /// A continuous position in [0, 1) for the uniform `u`, with its density: the chosen
+    /// index's cell, and `u` rescaled to a position inside it.
+    pub fn sample_continuous(&self, u: f32) -> Option<(f32, f32)> {
+        let (i, p) = self.sample(u)?;
+        let below = if i == 0 { 0.0 } else { self.cdf[i - 1] };
+        let inside = ((f64::from(u) * self.total - below) / (self.cdf[i] - below)).clamp(0.0, 1.0);
+        let n = self.cdf.len() as f32;
+        Some((((i as f64 + inside) as f32 / n).min(1.0 - f32::EPSILON), p * n))
+    }
+
     /// The probability of index `i`.
     pub fn probability(&self, i: usize) -> f32 {
         let below = if i == 0 { 0.0 } else { self.cdf[i - 1] };
         ((self.cdf[i] - below) / self.total) as f32
+    }
+}
+
+/// A piecewise-constant density on the unit square from a grid of weights (rows of `width`),
+/// sampled by a marginal over rows and a conditional within the row (pbrt-v4, section A.5).
+#[derive(Clone, Debug, Default)]
+pub struct Distribution2D {
+    rows: Vec<Distribution1D>,
+    marginal: Distribution1D,
+}
+
+impl Distribution2D {
+    /// The distribution proportional to `weights`, `height` rows of `width`.
+    pub fn new(weights: &[f64], width: usize) -> Self {
+        let rows: Vec<Distribution1D> =
+            weights.chunks_exact(width).map(|row| Distribution1D::new(row.iter().copied())).collect();
+        let marginal = Distribution1D::new(rows.iter().map(Distribution1D::total));
+        Distribution2D { rows, marginal }
+    }
+
+    /// A point (x along a row, y across rows) in [0, 1)^2 with its density; `None` if all
+    /// weights are zero.
+    pub fn sample(&self, u: Vec2) -> Option<(Vec2, f32)> {
+        let (y, p_y) = self.marginal.sample_continuous(u.y)?;
+        let row = &self.rows[((y * self.rows.len() as f32) as usize).min(self.rows.len() - 1)];
+        let (x, p_x) = row.sample_continuous(u.x)?;
+        Some((Vec2::new(x, y), p_x * p_y))
+    }
+
+    /// The density at `point` in [0, 1]^2.
+    pub fn pdf(&self, point: Vec2) -> f32 {
+        let height = self.rows.len();
+        if height == 0 || self.marginal.total() <= 0.0 {
+            return 0.0;
+        }
+        let j = ((point.y * height as f32) as usize).min(height - 1);
+        let row = &self.rows[j];
+        let width = row.cdf.len();
+        let i = ((point.x * width as f32) as usize).min(width - 1);
+        (row.cdf[i] - if i == 0 { 0.0 } else { row.cdf[i - 1] }) as f32 / self.marginal.total() as f32
+            * (width * height) as f32
     }
 }
 
@@ -164,6 +215,19 @@ mod tests {
         samples.sort_by(f32::total_cmp);
         let largest_gap = samples.windows(2).map(|w| w[1] - w[0]).fold(0.0, f32::max);
         assert!(largest_gap < 3.0 / 64.0, "{largest_gap}");
+    }
+
+    #[test]
+    fn two_dimensional_samples_have_the_density_they_report() {
+        let weights = [1.0, 2.0, 0.0, 4.0, 1.0, 3.0];
+        let d = Distribution2D::new(&weights, 3);
+        for u in [Vec2::new(0.1, 0.2), Vec2::new(0.7, 0.9), Vec2::new(0.5, 0.5)] {
+            let (point, pdf) = d.sample(u).unwrap();
+            assert!((pdf - d.pdf(point)).abs() < 1e-4, "{point}: {pdf} vs {}", d.pdf(point));
+        }
+        // Cell (2, 0) has weight 0 of 11 and cell (0, 1) has 4 of 11; 6 cells.
+        assert_eq!(d.pdf(Vec2::new(0.9, 0.1)), 0.0);
+        assert!((d.pdf(Vec2::new(0.1, 0.9)) - 4.0 / 11.0 * 6.0).abs() < 1e-5);
     }
 
     #[test]

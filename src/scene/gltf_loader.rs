@@ -57,7 +57,7 @@ pub fn load(path: &Path) -> Result<Scene, SceneError> {
     for node in gltf_scene.nodes() {
         builder.visit(&node, Mat4::IDENTITY).map_err(fail)?;
     }
-    let world = scene_extras.world.map(|w| world(&w)).transpose().map_err(fail)?;
+    let world = scene_extras.world.map(|w| world(&w, path)).transpose().map_err(fail)?;
     builder.finish(world).map_err(fail)
 }
 
@@ -135,12 +135,16 @@ fn texture(image: &gltf::image::Data, factor: Vec3) -> Result<Texture, String> {
     Ok(Texture::from_srgb8(image.width as usize, image.height as usize, channels, &image.pixels, factor))
 }
 
-fn world(w: &extras::WorldExtras) -> Result<World, String> {
-    if let Some(image) = &w.image {
-        return Err(format!("scene extras `caustic.world.image` ('{image}'): environment images are not supported yet; use `color` and `strength`"));
+/// The world from the scene extras; an image path is relative to the glTF file's folder.
+fn world(w: &extras::WorldExtras, gltf_path: &Path) -> Result<World, String> {
+    match &w.image {
+        Some(image) => {
+            let path = gltf_path.parent().unwrap_or(Path::new(".")).join(image);
+            World::from_image(&path, w.strength, w.rotation_deg)
+                .map_err(|e| format!("scene extras `caustic.world.image`: {e}"))
+        }
+        None => Ok(World::uniform(Vec3::from(w.color) * w.strength)),
     }
-    let radiance = Vec3::from(w.color) * w.strength;
-    Ok(World { radiance: RgbSpectrum::illuminant(radiance), sphere: Default::default() })
 }
 
 /// Blender's sun angle is the full angular diameter; a delta sun has cos_max = 1.

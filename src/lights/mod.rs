@@ -10,6 +10,10 @@
 //!
 //! Distant lights (sun, world) emit photons from a disc covering the scene's bounding sphere.
 
+mod world;
+
+pub use world::World;
+
 use glam::{Vec2, Vec3};
 use std::f32::consts::PI;
 
@@ -73,22 +77,6 @@ pub enum Light {
     },
     /// Light from infinitely far away in every direction.
     World(World),
-}
-
-/// The world: light from every direction, seen by rays that leave the scene.
-#[derive(Clone, Debug)]
-pub struct World {
-    /// Radiance, W / (m^2 sr), the same from every direction.
-    pub radiance: RgbSpectrum,
-    /// Where its photons start.
-    pub sphere: BoundingSphere,
-}
-
-impl World {
-    /// Spectral radiance arriving from direction `-dir` along a ray of direction `dir`.
-    pub fn radiance(&self, _dir: Vec3, lambda_nm: f32) -> f32 {
-        self.radiance.eval(lambda_nm) * d65(lambda_nm)
-    }
 }
 
 /// Light arriving at a point, sampled for next-event estimation.
@@ -163,7 +151,7 @@ impl Light {
             }
             Light::World(world) => {
                 let r = f64::from(world.sphere.radius);
-                world.radiance.luminance() * 4.0 * std::f64::consts::PI * std::f64::consts::PI * r * r
+                world.luminance_over_sphere() * std::f64::consts::PI * r * r
             }
         };
         if power.is_finite() {
@@ -206,8 +194,7 @@ impl Light {
                 Some(LightSample { wi, distance, radiance_over_pdf, pdf })
             }
             Light::World(world) => {
-                let wi = square_to_sphere(u);
-                let pdf = 1.0 / (4.0 * PI);
+                let (wi, pdf) = world.sample_direction(u)?;
                 let radiance_over_pdf = world.radiance(wi, lambda_nm) / pdf;
                 Some(LightSample { wi, distance: f32::INFINITY, radiance_over_pdf, pdf })
             }
@@ -230,7 +217,7 @@ impl Light {
             Light::Sun { direction, cos_max, .. } if *cos_max < 1.0 && -direction.dot(wi) >= *cos_max => {
                 1.0 / cone_solid_angle(*cos_max)
             }
-            Light::World(_) => 1.0 / (4.0 * PI),
+            Light::World(world) => world.pdf(wi),
             _ => 0.0,
         }
     }
@@ -301,12 +288,13 @@ impl Light {
                 }
             }
             Light::World(world) => {
-                let direction = square_to_sphere(u_direction);
+                // A direction light arrives from, then the photon travels the other way.
+                let (wi, pdf) = world.sample_direction(u_direction)?;
                 let r = world.sphere.radius;
                 EmittedPhoton {
-                    origin: disc_origin(&world.sphere, direction, u_position),
-                    direction,
-                    flux: world.radiance(-direction, lambda_nm) * 4.0 * PI * PI * r * r,
+                    origin: disc_origin(&world.sphere, -wi, u_position),
+                    direction: -wi,
+                    flux: world.radiance(wi, lambda_nm) * PI * r * r / pdf,
                 }
             }
         };
