@@ -240,6 +240,29 @@ impl GltfBuilder {
         doc
     }
 
+    /// Writes the scene as a binary `dir/name.glb` (the buffer in the BIN chunk) and returns the path.
+    pub fn write_glb(&self, dir: &Path, name: &str) -> PathBuf {
+        let mut doc = self.to_json();
+        doc["buffers"][0].as_object_mut().unwrap().remove("uri");
+        let mut json = serde_json::to_vec(&doc).unwrap();
+        json.resize(json.len().div_ceil(4) * 4, b' ');
+        let mut bin = self.buffer.clone();
+        bin.resize(bin.len().div_ceil(4) * 4, 0);
+        let total = 12 + 8 + json.len() + 8 + bin.len();
+        let mut out = Vec::with_capacity(total);
+        for word in [0x4654_6C67u32, 2, total as u32, json.len() as u32, 0x4E4F_534A] {
+            out.extend_from_slice(&word.to_le_bytes());
+        }
+        out.extend_from_slice(&json);
+        for word in [bin.len() as u32, 0x004E_4942] {
+            out.extend_from_slice(&word.to_le_bytes());
+        }
+        out.extend_from_slice(&bin);
+        let path = dir.join(format!("{name}.glb"));
+        std::fs::write(&path, out).unwrap();
+        path
+    }
+
     /// Writes the scene to `dir/name.gltf` and returns the path.
     pub fn write(&self, dir: &Path, name: &str) -> PathBuf {
         let path = dir.join(format!("{name}.gltf"));
