@@ -93,3 +93,58 @@ fn glb_and_gltf_render_the_same() {
         .collect();
     assert_eq!(images[0].rgb, images[1].rgb);
 }
+
+/// A base-colour texture (8-bit sRGB PNG, two red texels then two blue ones) times the factor
+/// colours the ground: each half reflects its texels' linear colour (2%, plus 0.003 absolute for
+/// channels near zero, whose values are small differences of large XYZ terms; measured away from
+/// where the bilinear lookup blends red into blue).
+#[test]
+fn base_colour_textures_colour_the_ground() {
+    let dir = tempfile::tempdir().unwrap();
+    let texels = image::RgbImage::from_fn(4, 1, |x, _| {
+        if x < 2 {
+            image::Rgb([200, 40, 40])
+        } else {
+            image::Rgb([30, 60, 220])
+        }
+    });
+    texels.save(dir.path().join("checker.png")).unwrap();
+    let mut gltf = GltfBuilder::default();
+    let texture = gltf.texture("checker.png");
+    let material = gltf.material(json!({"pbrMetallicRoughness": {"baseColorTexture": {"index": texture},
+        "baseColorFactor": [1.0, 1.0, 1.0, 1.0], "metallicFactor": 0.0}}));
+    // The ground spans x in [-1, 1]: u = (x + 1) / 2, so the red texels are at x < 0.
+    let (a, b, c, d) = ([-1.0, 0.0, -1.0], [-1.0, 0.0, 1.0], [1.0, 0.0, 1.0], [1.0, 0.0, -1.0]);
+    let uv = |p: [f32; 3]| [(p[0] + 1.0) / 2.0, (p[2] + 1.0) / 2.0];
+    gltf.mesh_with_uvs(
+        "Ground",
+        &[[a, b, c], [a, c, d]],
+        &[uv(a), uv(b), uv(c), uv(a), uv(c), uv(d)],
+        material,
+    );
+    gltf.light(json!({"type": "directional", "intensity": PI * 683.0}), [0.0, 5.0, 0.0], [0.0, -1.0, 0.0]);
+    gltf.camera([0.0, 4.0, 0.0], [0.0, -1.0, 0.0], 0.5);
+    gltf.scene_extras(json!({"resolution": [32, 32]}));
+    let path = gltf.write(dir.path(), "textured");
+    let image = render(&settings(&path, dir.path(), 512), 2);
+    let linear = |c: u8| {
+        let c = f64::from(c) / 255.0;
+        if c <= 0.04045 {
+            c / 12.92
+        } else {
+            ((c + 0.055) / 1.055).powf(2.4)
+        }
+    };
+    // The view spans x in [-1.02, 1.02]: pixels 6..10 see x in [-0.64, -0.39], all red.
+    for (x0, texel) in [(6, [200, 40, 40]), (22, [30, 60, 220])] {
+        let mean = image.mean(x0, x0 + 4, 14, 18);
+        for ch in 0..3 {
+            let expected = linear(texel[ch]);
+            assert!(
+                (mean[ch] - expected).abs() < 0.02 * expected + 0.003,
+                "texel {texel:?} channel {ch}: {} vs {expected}",
+                mean[ch]
+            );
+        }
+    }
+}

@@ -221,3 +221,62 @@ pub fn face_toward(n: Vec3, w: Vec3) -> Vec3 {
         n
     }
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::sampling::{square_to_sphere, stream, Stream};
+
+    const FRAME: ShadingFrame = ShadingFrame { n: Vec3::Z, ng: Vec3::Z };
+
+    /// Every sample's weight is `f cos / pdf` as `eval` and `pdf` say, and the mean weight (the
+    /// importance-sampled albedo) matches the albedo integrated with uniform directions.
+    fn check_sampling_against_eval(bsdf: Bsdf, wo: Vec3) {
+        let mut rng = stream(3, Stream::Eye, 0, 0);
+        let n = 200_000;
+        let mut sampled = 0.0f64;
+        for _ in 0..n {
+            let Some(s) = bsdf.sample(FRAME, wo, rng.next_2d(), rng.next_1d(), Transport::Radiance) else {
+                continue;
+            };
+            let (f, pdf) = (bsdf.eval(Vec3::Z, wo, s.wi), bsdf.pdf(Vec3::Z, wo, s.wi));
+            assert!((s.pdf / pdf - 1.0).abs() < 1e-3, "{bsdf:?}: pdf {} vs {pdf}", s.pdf);
+            assert!((s.weight / (f * s.wi.z.abs() / pdf) - 1.0).abs() < 1e-3, "{bsdf:?}: weight");
+            sampled += f64::from(s.weight);
+        }
+        let uniform: f64 = (0..n)
+            .map(|_| {
+                let wi = square_to_sphere(rng.next_2d());
+                f64::from(bsdf.eval(Vec3::Z, wo, wi) * wi.z.abs() * 4.0 * std::f32::consts::PI)
+            })
+            .sum();
+        let (sampled, uniform) = (sampled / n as f64, uniform / n as f64);
+        assert!((sampled - uniform).abs() < 0.02 * uniform.max(0.1), "{bsdf:?}: {sampled} vs {uniform}");
+    }
+
+    #[test]
+    fn diffuse_sampling_matches_its_density() {
+        check_sampling_against_eval(Bsdf::Diffuse { albedo: 0.7 }, Vec3::new(0.3, 0.1, 0.9).normalize());
+    }
+
+    #[test]
+    fn ggx_sampling_matches_its_density() {
+        for alpha in [0.1, 0.3, 0.8] {
+            for wo in [Vec3::new(0.0, 0.0, 1.0), Vec3::new(0.8, 0.1, 0.3).normalize()] {
+                check_sampling_against_eval(Bsdf::RoughConductor { f0: 0.9, alpha }, wo);
+            }
+        }
+    }
+
+    #[test]
+    fn materials_pick_lobes_by_their_weights() {
+        let glass = Material { transmission: 1.0, roughness: 0.0, ..Material::default_grey() };
+        assert_eq!(glass.bsdf(0.8, 0.5), Bsdf::Dielectric { ior: 1.5 });
+        let mirror = Material { metallic: 1.0, roughness: 0.0, ..Material::default_grey() };
+        assert_eq!(mirror.bsdf(0.8, 0.5), Bsdf::Conductor { f0: 0.8 });
+        let rough = Material { metallic: 1.0, roughness: 0.5, ..Material::default_grey() };
+        assert_eq!(rough.bsdf(0.8, 0.5), Bsdf::RoughConductor { f0: 0.8, alpha: 0.25 });
+        let half = Material { metallic: 0.5, ..Material::default_grey() };
+        assert_eq!(half.bsdf(0.8, 0.7), Bsdf::Diffuse { albedo: 0.8 });
+    }
+}

@@ -220,6 +220,7 @@ mod tests {
             Vec3::new(0.05, 0.6, 0.2),
             Vec3::new(0.1, 0.2, 0.9),
             Vec3::new(0.9, 0.9, 0.02),
+            Vec3::new(0.01298, 0.04519, 0.71569),
         ] {
             let s = RgbSpectrum::reflectance(rgb);
             let back = colour_under_d65(&s);

@@ -117,6 +117,7 @@ pub struct GltfBuilder {
     nodes: Vec<Value>,
     cameras: Vec<Value>,
     lights: Vec<Value>,
+    images: Vec<Value>,
     scene_extras: Option<Value>,
 }
 
@@ -155,6 +156,26 @@ impl GltfBuilder {
     pub fn material(&mut self, material: Value) -> usize {
         self.materials.push(material);
         self.materials.len() - 1
+    }
+
+    /// Adds an image file (relative `uri`) as a texture and returns the texture's index.
+    pub fn texture(&mut self, uri: &str) -> usize {
+        self.images.push(json!({"uri": uri}));
+        self.images.len() - 1
+    }
+
+    /// Adds a non-indexed triangle mesh with texture coordinates (three per triangle).
+    pub fn mesh_with_uvs(
+        &mut self,
+        name: &str,
+        triangles: &[[[f32; 3]; 3]],
+        uvs: &[[f32; 2]],
+        material: usize,
+    ) {
+        self.mesh(name, triangles, material);
+        let flat: Vec<f32> = uvs.iter().flatten().copied().collect();
+        let uv = self.add_accessor(&flat, 2, "VEC2");
+        self.meshes.last_mut().unwrap()["primitives"][0]["attributes"]["TEXCOORD_0"] = json!(uv);
     }
 
     /// Adds a non-indexed triangle mesh (flat normals) with `material`.
@@ -233,6 +254,10 @@ impl GltfBuilder {
         if !self.lights.is_empty() {
             doc["extensionsUsed"] = json!(["KHR_lights_punctual"]);
             doc["extensions"] = json!({"KHR_lights_punctual": {"lights": self.lights}});
+        }
+        if !self.images.is_empty() {
+            doc["images"] = json!(self.images);
+            doc["textures"] = json!((0..self.images.len()).map(|i| json!({"source": i})).collect::<Vec<_>>());
         }
         if let Some(extras) = &self.scene_extras {
             doc["scenes"][0]["extras"] = extras.clone();
