@@ -148,3 +148,39 @@ fn base_colour_textures_colour_the_ground() {
         }
     }
 }
+
+/// A sun with an angular diameter (Blender's angle, in the node's caustic extras) still delivers
+/// its irradiance: the ground reflects 1 as under a delta sun, but through light sampling and
+/// BSDF sampling of the sun's disc combined.
+#[test]
+fn a_sun_with_an_angular_diameter_keeps_its_irradiance() {
+    let dir = tempfile::tempdir().unwrap();
+    let gltf = ground_scene(|g| {
+        g.light(json!({"type": "directional", "intensity": PI * 683.0}), [0.0, 5.0, 0.0], [0.0, -1.0, 0.0]);
+    });
+    let mut doc = gltf.to_json();
+    let sun = doc["nodes"].as_array().unwrap().len() - 1;
+    doc["nodes"][sun]["extras"] = json!({"caustic": {"sun_angle_deg": 20.0}});
+    let path = dir.path().join("sun.gltf");
+    std::fs::write(&path, doc.to_string()).unwrap();
+    assert_near(mean_luminance(&path, dir.path()), 1.0, "sun of 20 degrees");
+}
+
+/// Node transforms nest: a point light 1 above its parent, which is 1 above the ground, is 2
+/// above the ground (E = pi, radiance 1), not 1 (which would give 4).
+#[test]
+fn node_transforms_nest() {
+    let dir = tempfile::tempdir().unwrap();
+    let light = json!({"type": "point", "intensity": 4.0 * PI * 683.0});
+    let gltf = ground_scene(|g| g.light(light, [0.0, 1.0, 0.0], [0.0, -1.0, 0.0]));
+    let mut doc = gltf.to_json();
+    let nodes = doc["nodes"].as_array_mut().unwrap();
+    let light_node = nodes.len() - 1;
+    nodes.push(json!({"name": "Parent", "translation": [0.0, 1.0, 0.0], "children": [light_node]}));
+    let parent = nodes.len() - 1;
+    let roots: Vec<usize> = (0..parent).filter(|&n| n != light_node).chain([parent]).collect();
+    doc["scenes"][0]["nodes"] = json!(roots);
+    let path = dir.path().join("nested.gltf");
+    std::fs::write(&path, doc.to_string()).unwrap();
+    assert_near(mean_luminance(&path, dir.path()), 1.0, "nested point light");
+}
