@@ -174,13 +174,13 @@ impl Progress {
         let bar = (style == ProgressStyle::Bar).then(|| {
             let bar =
                 indicatif::ProgressBar::with_draw_target(limit, indicatif::ProgressDrawTarget::stderr());
-            bar.set_style(
-                indicatif::ProgressStyle::with_template(
-                    "frame 1 [{bar:40}] pass {pos}/{len} {elapsed_precise} eta {eta}",
-                )
-                .expect("valid template")
-                .progress_chars("=> "),
-            );
+            // Without a pass count the time budget ends the frame: show passes and time only.
+            let template = match limit {
+                Some(_) => "frame 1 [{bar:40}] pass {pos}/{len} {elapsed_precise} eta {eta}",
+                None => "frame 1 pass {pos} {elapsed_precise} (until the time budget)",
+            };
+            let style = indicatif::ProgressStyle::with_template(template).expect("valid template");
+            bar.set_style(style.progress_chars("=> "));
             bar
         });
         Progress { style, bar, limit }
@@ -199,7 +199,7 @@ impl Progress {
 
     fn finish(&self) {
         if let Some(bar) = &self.bar {
-            bar.finish();
+            bar.finish_and_clear();
         }
     }
 }
