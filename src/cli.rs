@@ -31,31 +31,31 @@ pub struct RenderArgs {
     /// The glTF 2.0 scene (.gltf or .glb); the bundled demo scene when omitted.
     scene: Option<PathBuf>,
     /// Output folder for frame_NNNN.exr.
-    #[arg(short, long = "out", default_value = "renders")]
+    #[arg(short, long = "out", value_name = "DIR", default_value = "renders")]
     out: PathBuf,
     /// Number of passes (default 64 unless --time-budget is given).
-    #[arg(long, value_parser = at_least_one)]
+    #[arg(long, value_name = "N", value_parser = at_least_one)]
     passes: Option<u64>,
     /// Stop after the pass that ends past this many seconds.
-    #[arg(long, allow_negative_numbers = true, value_parser = positive_f64)]
+    #[arg(long, value_name = "SECS", allow_negative_numbers = true, value_parser = positive_f64)]
     time_budget: Option<f64>,
     /// Photon paths per pass (default: one per pixel).
-    #[arg(long, value_parser = at_least_one)]
+    #[arg(long, value_name = "N", value_parser = at_least_one)]
     photons: Option<u64>,
     /// Radius reduction alpha of Knaus & Zwicker, in (0, 1).
-    #[arg(long, default_value_t = 2.0 / 3.0, allow_negative_numbers = true, value_parser = unit_interval)]
+    #[arg(long, value_name = "A", default_value_t = 2.0 / 3.0, allow_negative_numbers = true, value_parser = unit_interval)]
     alpha: f64,
     /// First-pass gather radius in scene units (default: 1% of the scene's bounding diameter).
-    #[arg(long, allow_negative_numbers = true, value_parser = positive_f64)]
+    #[arg(long, value_name = "R", allow_negative_numbers = true, value_parser = positive_f64)]
     radius: Option<f64>,
     /// Image size WxH (default: the scene's, else 640 wide at the camera's aspect).
-    #[arg(long, value_parser = parse_resolution)]
+    #[arg(long, value_name = "WxH", value_parser = parse_resolution)]
     resolution: Option<[u32; 2]>,
     /// Random seed: the same seed gives the same image with any thread count.
-    #[arg(long, default_value_t = 1)]
+    #[arg(long, value_name = "S", default_value_t = 1)]
     seed: u64,
     /// Worker threads, 1 to 256 (default: all cores).
-    #[arg(long, value_parser = thread_count)]
+    #[arg(long, value_name = "N", value_parser = thread_count)]
     threads: Option<u64>,
     /// Progress display: a bar on the terminal, JSON lines on stdout, or none.
     #[arg(long, value_enum, default_value_t = ProgressStyle::Bar)]
