@@ -46,6 +46,8 @@ pub struct Film {
     pub white_xyz: DVec3,
     /// Passes summed into `white_xyz`.
     pub passes: u64,
+    /// Pixel estimates that were NaN or infinite, counted as zero.
+    pub non_finite_estimates: u64,
 }
 
 impl Film {
@@ -57,6 +59,7 @@ impl Film {
             pixels: vec![PixelSums::default(); (width * height) as usize],
             white_xyz: DVec3::ZERO,
             passes: 0,
+            non_finite_estimates: 0,
         }
     }
 
@@ -66,6 +69,14 @@ impl Film {
         self.white_xyz += weight * f64::from(d65(lambda_nm));
         self.passes += 1;
         for (sums, (radiance, laplacian)) in self.pixels.iter_mut().zip(estimates) {
+            // A non-finite estimate would poison the pixel's sums for good: count it as zero and
+            // report it, so the image stays usable and the problem is not silent.
+            let (radiance, laplacian) = if radiance.is_finite() && laplacian.is_finite() {
+                (radiance, laplacian)
+            } else {
+                self.non_finite_estimates += 1;
+                (0.0, 0.0)
+            };
             let xyz = weight * f64::from(radiance);
             sums.xyz += xyz;
             sums.y_squared += xyz.y * xyz.y;
@@ -117,5 +128,37 @@ impl Film {
             .map_err(|e| format!("cannot write {}: {e}", temporary.display()))?;
         std::fs::rename(&temporary, path)
             .map_err(|e| format!("cannot rename {} to {}: {e}", temporary.display(), path.display()))
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::sampling::pass_sample;
+    use crate::spectrum::sample_visible_wavelength;
+
+    /// Adds `passes` passes in which every pixel sees `radiance(lambda)`.
+    fn film_of(passes: u64, radiance: impl Fn(f32) -> f32) -> Film {
+        let mut film = Film::new(2, 1);
+        for i in 0..passes {
+            let (lambda, pdf) = sample_visible_wavelength(pass_sample(5, i));
+            film.add_pass(lambda, pdf, [(radiance(lambda), 0.0), (radiance(lambda), 0.0)].into_iter());
+        }
+        film
+    }
+
+    #[test]
+    fn a_spectrum_proportional_to_d65_is_exactly_grey_after_any_number_of_passes() {
+        for passes in [1, 3, 17] {
+            let rgb = film_of(passes, |l| 0.25 * d65(l)).rgb()[0];
+            assert!((rgb - DVec3::splat(0.25)).abs().max_element() < 1e-6, "{passes} passes: {rgb}");
+        }
+    }
+
+    #[test]
+    fn non_finite_estimates_are_counted_and_do_not_poison_the_pixel() {
+        let film = film_of(16, |l| if l < 550.0 { f32::NAN } else { d65(l) });
+        assert!(film.non_finite_estimates > 0);
+        assert!(film.rgb().iter().all(|c| c.is_finite()));
     }
 }

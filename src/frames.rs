@@ -128,6 +128,12 @@ pub fn render(settings: &RenderSettings) -> Result<FrameReport, String> {
     std::fs::create_dir_all(&settings.out_dir)
         .map_err(|e| format!("cannot create output folder {}: {e}", settings.out_dir.display()))?;
     let (film, passes, elapsed_s, stats) = run_passes(&renderer, settings);
+    if film.non_finite_estimates > 0 {
+        eprintln!(
+            "caustic: warning: {} pixel estimates were NaN or infinite and counted as zero (please report this scene)",
+            film.non_finite_estimates
+        );
+    }
     let path = settings.out_dir.join(format!("frame_{:04}.exr", 1));
     film.write_exr(&path)?;
     Ok(FrameReport { path, film, passes, elapsed_s, stats })
