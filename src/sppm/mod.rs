@@ -4,6 +4,7 @@
 //! estimate for pass `i`, which depends only on (scene, settings, seed, i): passes are
 //! independent (Knaus & Zwicker 2011), so any pass range can be rendered anywhere and summed.
 
+mod direct;
 mod gather;
 mod grid;
 mod photons;
