@@ -8,6 +8,50 @@ use std::{env, fs, path::Path};
 const LAMBDA_MIN_NM: f64 = 360.0;
 const LAMBDA_MAX_NM: f64 = 830.0;
 
+/// Fields of each data row of a CSV file (quoted fields may hold commas), skipping `#` comments
+/// and the header line.
+fn read_records(path: &Path) -> Vec<Vec<String>> {
+    let text = fs::read_to_string(path).unwrap_or_else(|e| panic!("{}: {e}", path.display()));
+    text.lines()
+        .filter(|line| !line.starts_with('#') && !line.trim().is_empty())
+        .skip(1)
+        .map(|line| {
+            let mut fields = vec![String::new()];
+            let mut quoted = false;
+            for ch in line.chars() {
+                match ch {
+                    '"' => quoted = !quoted,
+                    ',' if !quoted => fields.push(String::new()),
+                    _ => fields.last_mut().expect("one field").push(ch),
+                }
+            }
+            fields
+        })
+        .collect()
+}
+
+/// The glass catalogue as a Rust array of `Glass` literals.
+fn glass_catalogue(path: &Path) -> String {
+    let rows: Vec<String> = read_records(path)
+        .iter()
+        .map(|f| {
+            let number = |i: usize| -> f64 {
+                f[i].trim().parse().unwrap_or_else(|e| panic!("{}: {}: field {i}: {e}", path.display(), f[0]))
+            };
+            format!(
+                "Glass {{ name: {:?}, b: [{:?}, {:?}, {:?}, {:?}], c: [{:?}, {:?}, {:?}, {:?}], n_f: {:?}, n_d: {:?}, n_c: {:?}, v_d: {:?}, source: {:?} }}",
+                f[0], number(1), number(2), number(3), number(4), number(5), number(6), number(7), number(8),
+                number(9), number(10), number(11), number(12), f[13]
+            )
+        })
+        .collect();
+    format!(
+        "/// The glass catalogue from spectra/glasses.csv.\npub const GLASSES: [Glass; {}] = [{}];\n",
+        rows.len(),
+        rows.join(", ")
+    )
+}
+
 /// Rows of numbers from a CSV file, skipping `#` comments and the header line.
 fn read_csv(path: &Path) -> Vec<Vec<f64>> {
     let text = fs::read_to_string(path).unwrap_or_else(|e| panic!("{}: {e}", path.display()));
@@ -77,7 +121,9 @@ fn main() {
     out += &rust_array("CIE_Z", &z);
     out += &rust_array("D65_NORMALISED", &d65);
     out += &rust_array("XYZ_TO_LINEAR_REC709", &matrix);
-    let target = Path::new(&env::var("OUT_DIR").expect("cargo sets OUT_DIR")).join("tables.rs");
-    fs::write(target, out).expect("write baked tables");
+    let out_dir = env::var("OUT_DIR").expect("cargo sets OUT_DIR");
+    fs::write(Path::new(&out_dir).join("tables.rs"), out).expect("write baked tables");
+    let glasses = glass_catalogue(&dir.join("glasses.csv"));
+    fs::write(Path::new(&out_dir).join("glasses.rs"), glasses).expect("write the glass catalogue");
     println!("cargo:rerun-if-changed=spectra");
 }

@@ -29,6 +29,8 @@ pub fn run(scene_path: &Path, resolution: [u32; 2], passes: u64) -> Result<(), S
         resolution: Some(resolution),
         seed: 1,
         progress: ProgressStyle::None,
+        wavelength_nm: None,
+        spectral_bins: 0,
     };
     let scene = load_scene(&settings)?;
     let start = Instant::now();

@@ -60,6 +60,13 @@ pub struct RenderArgs {
     /// Progress display: a bar on the terminal, JSON lines on stdout, or none.
     #[arg(long, value_enum, default_value_t = ProgressStyle::Bar)]
     progress: ProgressStyle,
+    /// Render every pass at this one wavelength, 360 to 830 nm (diagnosis; the image is the
+    /// radiance relative to white at that wavelength, in its colour).
+    #[arg(long, value_name = "NM", value_parser = wavelength, conflicts_with = "spectral_bins")]
+    wavelength: Option<f32>,
+    /// Also write K spectral bands (channels Spectral.<centre>nm, W/(m^2 sr nm)), 1 to 94.
+    #[arg(long, value_name = "K", value_parser = spectral_bins, default_value_t = 0)]
+    spectral_bins: usize,
 }
 
 /// Flags of `caustic bench`.
@@ -79,6 +86,22 @@ fn at_least_one(s: &str) -> Result<u64, String> {
     match s.parse::<u64>() {
         Ok(v) if v >= 1 => Ok(v),
         _ => Err(format!("expected a whole number of at least 1, got '{s}'")),
+    }
+}
+
+fn wavelength(s: &str) -> Result<f32, String> {
+    match s.parse::<f32>() {
+        Ok(v) if (360.0..=830.0).contains(&v) => Ok(v),
+        _ => Err(format!("expected a wavelength from 360 to 830 nm, got '{s}'")),
+    }
+}
+
+fn spectral_bins(s: &str) -> Result<usize, String> {
+    match s.parse::<usize>() {
+        Ok(v) if v <= crate::film::MAX_SPECTRAL_BINS => Ok(v),
+        _ => {
+            Err(format!("expected a number of bands from 0 to {}, got '{s}'", crate::film::MAX_SPECTRAL_BINS))
+        }
     }
 }
 
@@ -125,6 +148,8 @@ impl RenderArgs {
             resolution: self.resolution,
             seed: self.seed,
             progress: self.progress,
+            wavelength_nm: self.wavelength,
+            spectral_bins: self.spectral_bins,
         }
     }
 }

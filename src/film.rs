@@ -3,15 +3,76 @@
 //! A pixel keeps only sums: of the pass estimates converted to XYZ (`L cmf(lambda) / p(lambda)`),
 //! of the square of their luminance, of the Laplacian term's luminance, and the pass count.
 //! Two films of disjoint pass ranges therefore merge exactly by adding. The image is the mean,
-//! white-balanced (below), XYZ to linear Rec.709, written as one part with `Combined.R/G/B/A` (what Blender's render result
-//! reads), to a temporary file that is renamed into place when complete.
+//! white-balanced (below), XYZ to linear Rec.709, written as one part with `Combined.R/G/B/A`
+//! (what Blender's render result reads), to a temporary file that is renamed into place when
+//! complete. Optional spectral bins add `Spectral.<centre>nm` channels: the mean spectral
+//! radiance over each band, W / (m^2 sr nm).
+//!
+//! With one fixed wavelength (`--wavelength`), the image is the radiance relative to the white
+//! illuminant at that wavelength (a white surface under a white light is 1) in the colour of that
+//! wavelength, brought into the Rec.709 gamut by adding white at constant luminance.
 
 use std::path::Path;
 
 use exr::prelude::*;
 use glam::DVec3;
 
-use crate::spectrum::{cmf, d65, d65_xyz, xyz_to_linear_rec709};
+use crate::spectrum::{
+    cmf, d65, d65_xyz, linear_rec709_to_xyz, xyz_to_linear_rec709, LAMBDA_MAX_NM, LAMBDA_MIN_NM,
+};
+
+/// How the film weighs each pass's wavelength.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub enum FilmMode {
+    /// Wavelengths sampled with a density: XYZ by `L cmf / p`, white-balanced.
+    Spectral,
+    /// Every pass at `lambda_nm`: radiance relative to white, in that wavelength's colour.
+    Monochromatic {
+        /// The wavelength.
+        lambda_nm: f32,
+    },
+}
+
+/// The most spectral bins (5 nm wide over 360..830 nm, so their names stay distinct).
+pub const MAX_SPECTRAL_BINS: usize = 94;
+
+/// Per-pixel sums of spectral radiance in equal wavelength bands over 360..830 nm.
+#[derive(Clone, Debug, Default)]
+pub struct SpectralBins {
+    /// Number of bands.
+    pub count: usize,
+    /// `count` sums per pixel, pixel-major.
+    pub sums: Vec<f64>,
+}
+
+impl SpectralBins {
+    fn width_nm(&self) -> f64 {
+        f64::from(LAMBDA_MAX_NM - LAMBDA_MIN_NM) / self.count as f64
+    }
+
+    /// The band holding `lambda_nm`.
+    fn band(&self, lambda_nm: f32) -> usize {
+        (((f64::from(lambda_nm - LAMBDA_MIN_NM)) / self.width_nm()) as usize).min(self.count - 1)
+    }
+
+    /// The channel name of band `k`: its centre wavelength.
+    pub fn channel_name(&self, k: usize) -> String {
+        format!("Spectral.{:.0}nm", f64::from(LAMBDA_MIN_NM) + (k as f64 + 0.5) * self.width_nm())
+    }
+}
+
+/// The XYZ, of luminance 1, of the colour shown for light of one wavelength: the spectral colour
+/// with just enough white added to bring it into the Rec.709 gamut.
+pub fn display_xyz(lambda_nm: f32) -> DVec3 {
+    let xyz = cmf(lambda_nm).as_dvec3();
+    if xyz.y <= 0.0 {
+        return DVec3::ZERO;
+    }
+    let rgb = xyz_to_linear_rec709(xyz / xyz.y);
+    let lowest = rgb.min_element().min(0.0);
+    // Rec.709 (1, 1, 1) has luminance 1, so this keeps the luminance at 1.
+    linear_rec709_to_xyz((rgb - DVec3::splat(lowest)) / (1.0 - lowest))
+}
 
 /// One pixel's running sums over passes.
 #[derive(Clone, Copy, Debug, Default, PartialEq)]
@@ -48,12 +109,19 @@ pub struct Film {
     pub passes: u64,
     /// Pixel estimates that were NaN or infinite, counted as zero.
     pub non_finite_estimates: u64,
+    /// How wavelengths are weighed.
+    pub mode: FilmMode,
+    /// Optional spectral bands (count 0 when off).
+    pub bins: SpectralBins,
 }
 
 impl Film {
-    /// An empty film.
-    pub fn new(width: u32, height: u32) -> Self {
+    /// An empty film with `spectral_bins` bands (0 for none).
+    pub fn new(width: u32, height: u32, mode: FilmMode, spectral_bins: usize) -> Self {
+        let pixels = (width * height) as usize;
         Film {
+            mode,
+            bins: SpectralBins { count: spectral_bins, sums: vec![0.0; pixels * spectral_bins] },
             width,
             height,
             pixels: vec![PixelSums::default(); (width * height) as usize],
@@ -65,10 +133,15 @@ impl Film {
 
     /// Adds one pass: `radiance[i]` and `laplacian[i]` at `lambda_nm`, sampled with density `pdf`.
     pub fn add_pass(&mut self, lambda_nm: f32, pdf: f32, estimates: impl Iterator<Item = (f32, f32)>) {
-        let weight = (cmf(lambda_nm) / pdf).as_dvec3();
+        let weight = match self.mode {
+            FilmMode::Spectral => (cmf(lambda_nm) / pdf).as_dvec3(),
+            FilmMode::Monochromatic { .. } => display_xyz(lambda_nm) / f64::from(d65(lambda_nm)),
+        };
         self.white_xyz += weight * f64::from(d65(lambda_nm));
         self.passes += 1;
-        for (sums, (radiance, laplacian)) in self.pixels.iter_mut().zip(estimates) {
+        let band = (self.bins.count > 0).then(|| self.bins.band(lambda_nm));
+        let band_weight = 1.0 / (f64::from(pdf) * self.bins.width_nm());
+        for (i, (sums, (radiance, laplacian))) in self.pixels.iter_mut().zip(estimates).enumerate() {
             // A non-finite estimate would poison the pixel's sums for good: count it as zero and
             // report it, so the image stays usable and the problem is not silent.
             let (radiance, laplacian) = if radiance.is_finite() && laplacian.is_finite() {
@@ -82,12 +155,15 @@ impl Film {
             sums.y_squared += xyz.y * xyz.y;
             sums.laplacian_y += weight.y * f64::from(laplacian);
             sums.passes += 1;
+            if let Some(band) = band {
+                self.bins.sums[i * self.bins.count + band] += f64::from(radiance) * band_weight;
+            }
         }
     }
 
     /// The per-channel XYZ scale that makes the passes' white estimate exact.
     fn white_balance(&self) -> DVec3 {
-        if self.passes == 0 || self.white_xyz.min_element() <= 0.0 {
+        if self.mode != FilmMode::Spectral || self.passes == 0 || self.white_xyz.min_element() <= 0.0 {
             return DVec3::ONE;
         }
         d65_xyz() / (self.white_xyz / self.passes as f64)
@@ -113,12 +189,19 @@ impl Film {
         let (w, h) = (self.width as usize, self.height as usize);
         let channel = |name: &str, values: Vec<f32>| AnyChannel::new(name, FlatSamples::F32(values));
         let component = |k: usize| rgb.iter().map(|c| c[k] as f32).collect::<Vec<f32>>();
-        let channels = AnyChannels::sort(SmallVec::from_vec(vec![
+        let mut list = vec![
             channel("Combined.R", component(0)),
             channel("Combined.G", component(1)),
             channel("Combined.B", component(2)),
             channel("Combined.A", vec![1.0; w * h]),
-        ]));
+        ];
+        for k in 0..self.bins.count {
+            let passes = self.passes.max(1) as f64;
+            let band =
+                (0..w * h).map(|i| (self.bins.sums[i * self.bins.count + k] / passes) as f32).collect();
+            list.push(channel(&self.bins.channel_name(k), band));
+        }
+        let channels = AnyChannels::sort(SmallVec::from_vec(list));
         let layer = Layer::new((w, h), LayerAttributes::default(), Encoding::SMALL_LOSSLESS, channels);
         let image = Image::from_layer(layer);
         let temporary = path.with_extension("exr.partial");
@@ -139,7 +222,7 @@ mod tests {
 
     /// Adds `passes` passes in which every pixel sees `radiance(lambda)`.
     fn film_of(passes: u64, radiance: impl Fn(f32) -> f32) -> Film {
-        let mut film = Film::new(2, 1);
+        let mut film = Film::new(2, 1, FilmMode::Spectral, 0);
         for i in 0..passes {
             let (lambda, pdf) = sample_visible_wavelength(pass_sample(5, i));
             film.add_pass(lambda, pdf, [(radiance(lambda), 0.0), (radiance(lambda), 0.0)].into_iter());
@@ -153,6 +236,37 @@ mod tests {
             let rgb = film_of(passes, |l| 0.25 * d65(l)).rgb()[0];
             assert!((rgb - DVec3::splat(0.25)).abs().max_element() < 1e-6, "{passes} passes: {rgb}");
         }
+    }
+
+    #[test]
+    fn one_wavelength_shows_white_as_luminance_one_in_its_own_colour() {
+        for lambda in [450.0, 550.0, 650.0] {
+            let mut film = Film::new(1, 1, FilmMode::Monochromatic { lambda_nm: lambda }, 0);
+            film.add_pass(lambda, 1.0, [(0.5 * d65(lambda), 0.0)].into_iter());
+            let rgb = film.rgb()[0];
+            let luminance = 0.2126 * rgb.x + 0.7152 * rgb.y + 0.0722 * rgb.z;
+            assert!((luminance - 0.5).abs() < 1e-3 && rgb.min_element() >= -1e-9, "{lambda}: {rgb}");
+        }
+        let blue = film_rgb_at(450.0);
+        let red = film_rgb_at(650.0);
+        assert!(blue.z > blue.x && red.x > red.z);
+    }
+
+    fn film_rgb_at(lambda: f32) -> DVec3 {
+        xyz_to_linear_rec709(display_xyz(lambda))
+    }
+
+    #[test]
+    fn spectral_bins_average_the_spectral_radiance_of_their_band() {
+        let mut film = Film::new(1, 1, FilmMode::Spectral, 47);
+        for i in 0..40_000 {
+            let (lambda, pdf) = sample_visible_wavelength(pass_sample(9, i));
+            film.add_pass(lambda, pdf, [(2.0, 0.0)].into_iter());
+        }
+        let bands: Vec<f64> = film.bins.sums.iter().map(|s| s / film.passes as f64).collect();
+        // A flat spectrum of 2 per nm: every 10 nm band averages 2.
+        assert!(bands.iter().all(|b| (b - 2.0).abs() < 0.1), "{bands:?}");
+        assert_eq!(film.bins.channel_name(0), "Spectral.365nm");
     }
 
     #[test]

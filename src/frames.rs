@@ -7,7 +7,7 @@ use std::path::PathBuf;
 use std::time::Instant;
 
 use crate::accel::Accel;
-use crate::film::Film;
+use crate::film::{Film, FilmMode};
 use crate::scene::Scene;
 use crate::sppm::{PassStats, Renderer, SppmSettings};
 
@@ -48,6 +48,10 @@ pub struct RenderSettings {
     pub seed: u64,
     /// Progress display.
     pub progress: ProgressStyle,
+    /// Render every pass at this wavelength (nm).
+    pub wavelength_nm: Option<f32>,
+    /// Spectral bands written beside Combined (0 for none).
+    pub spectral_bins: usize,
 }
 
 /// What a finished frame reports.
@@ -97,6 +101,7 @@ pub fn sppm_settings(settings: &RenderSettings, scene: &Scene) -> SppmSettings {
         alpha: settings.alpha,
         initial_radius: settings.radius.unwrap_or_else(|| default_radius(scene)),
         seed: settings.seed,
+        fixed_wavelength_nm: settings.wavelength_nm,
     }
 }
 
@@ -142,7 +147,11 @@ pub fn render(settings: &RenderSettings) -> Result<FrameReport, String> {
 /// Runs passes 0, 1, ... until the pass count or the time budget is reached.
 pub fn run_passes(renderer: &Renderer, settings: &RenderSettings) -> (Film, u64, f64, PassStats) {
     let s = renderer.settings();
-    let mut film = Film::new(s.width, s.height);
+    let mode = match s.fixed_wavelength_nm {
+        Some(lambda_nm) => FilmMode::Monochromatic { lambda_nm },
+        None => FilmMode::Spectral,
+    };
+    let mut film = Film::new(s.width, s.height, mode, settings.spectral_bins);
     let limit =
         settings.passes.or(if settings.time_budget_s.is_some() { None } else { Some(DEFAULT_PASSES) });
     let progress = Progress::new(settings.progress, limit);

@@ -17,7 +17,7 @@ use std::sync::Arc;
 
 use glam::{Vec2, Vec3};
 
-use crate::spectrum::{d65, RgbSpectrum};
+use crate::spectrum::{d65, Dispersion, RgbSpectrum};
 
 pub use dielectric::fresnel_dielectric;
 pub use texture::Texture;
@@ -47,8 +47,9 @@ pub struct Material {
     pub roughness: f32,
     /// `KHR_materials_transmission` factor.
     pub transmission: f32,
-    /// `KHR_materials_ior` (1.5 when absent).
-    pub ior: f32,
+    /// Index of refraction against wavelength: `KHR_materials_ior` (1.5 when absent), with
+    /// `KHR_materials_dispersion` or a law from the `caustic` extras.
+    pub ior: Dispersion,
     /// Emitted radiance shape (times D65) in W / (m^2 sr), or `None`.
     pub emission: Option<RgbSpectrum>,
     /// Whether emission leaves both faces (meshes) or only the front (area lights).
@@ -64,7 +65,7 @@ impl Material {
             metallic: 0.0,
             roughness: 1.0,
             transmission: 0.0,
-            ior: 1.5,
+            ior: Dispersion::Constant(1.5),
             emission: None,
             emits_both_sides: true,
         }
@@ -88,12 +89,13 @@ impl Material {
         }
     }
 
-    /// The BSDF at `lambda_nm`, with `reflectance` the base colour already looked up and
-    /// `u_lobe` a uniform number that picks a lobe where the material mixes several.
-    pub fn bsdf(&self, reflectance: f32, u_lobe: f32) -> Bsdf {
+    /// The BSDF at texture coordinate `uv` and `lambda_nm`, with `u_lobe` a uniform number that
+    /// picks a lobe where the material mixes several.
+    pub fn bsdf(&self, uv: Vec2, lambda_nm: f32, u_lobe: f32) -> Bsdf {
         if u_lobe < self.transmission {
-            return Bsdf::Dielectric { ior: self.ior };
+            return Bsdf::Dielectric { ior: self.ior.index(lambda_nm) };
         }
+        let reflectance = self.reflectance(uv, lambda_nm);
         let u_lobe = (u_lobe - self.transmission) / (1.0 - self.transmission);
         let alpha = self.roughness * self.roughness;
         if u_lobe < self.metallic {
@@ -271,12 +273,17 @@ mod tests {
     #[test]
     fn materials_pick_lobes_by_their_weights() {
         let glass = Material { transmission: 1.0, roughness: 0.0, ..Material::default_grey() };
-        assert_eq!(glass.bsdf(0.8, 0.5), Bsdf::Dielectric { ior: 1.5 });
+        assert_eq!(glass.bsdf(Vec2::ZERO, 550.0, 0.5), Bsdf::Dielectric { ior: 1.5 });
+        let flint = Material { ior: Dispersion::glass("SF11").unwrap(), ..glass };
+        let (blue, red) = (flint.bsdf(Vec2::ZERO, 450.0, 0.5), flint.bsdf(Vec2::ZERO, 650.0, 0.5));
+        assert!(
+            matches!((blue, red), (Bsdf::Dielectric { ior: b }, Bsdf::Dielectric { ior: r }) if b > r + 0.02)
+        );
         let mirror = Material { metallic: 1.0, roughness: 0.0, ..Material::default_grey() };
-        assert_eq!(mirror.bsdf(0.8, 0.5), Bsdf::Conductor { f0: 0.8 });
+        assert!(matches!(mirror.bsdf(Vec2::ZERO, 550.0, 0.5), Bsdf::Conductor { .. }));
         let rough = Material { metallic: 1.0, roughness: 0.5, ..Material::default_grey() };
-        assert_eq!(rough.bsdf(0.8, 0.5), Bsdf::RoughConductor { f0: 0.8, alpha: 0.25 });
+        assert!(matches!(rough.bsdf(Vec2::ZERO, 550.0, 0.5), Bsdf::RoughConductor { alpha: 0.25, .. }));
         let half = Material { metallic: 0.5, ..Material::default_grey() };
-        assert_eq!(half.bsdf(0.8, 0.7), Bsdf::Diffuse { albedo: 0.8 });
+        assert!(matches!(half.bsdf(Vec2::ZERO, 550.0, 0.7), Bsdf::Diffuse { .. }));
     }
 }

@@ -6,7 +6,8 @@
 //!
 //! - scene: `{"caustic": {"resolution": [w, h], "world": World}}`
 //! - node: `{"caustic": {"area_light": AreaLight}}` on an area light's (empty) node, and
-//!   `{"caustic": {"sun_angle_deg": a}}` on a sun's node.
+//!   `{"caustic": {"sun_angle_deg": a}}` on a sun's node;
+//! - material: `{"caustic": {"glass": "BK7"}}`, or `"abbe"`, `"sellmeier"`, `"ior_table"`.
 
 use serde::Deserialize;
 
@@ -45,6 +46,32 @@ pub struct NodeExtras {
     pub area_light: Option<AreaLightExtras>,
     /// The angular diameter of the node's sun light, in degrees (soft shadows).
     pub sun_angle_deg: Option<f32>,
+}
+
+/// The `caustic` entry of a material's extras: how its index depends on wavelength (the first
+/// given of `glass`, `sellmeier`, `ior_table`, `abbe` wins; `KHR_materials_dispersion` applies
+/// when none is given).
+#[derive(Debug, Default, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct MaterialExtras {
+    /// A catalogue glass by name (spectra/glasses.csv).
+    pub glass: Option<String>,
+    /// Sellmeier coefficients (micrometres), up to four terms.
+    pub sellmeier: Option<SellmeierExtras>,
+    /// `[wavelength_nm, index]` pairs.
+    pub ior_table: Option<Vec<[f32; 2]>>,
+    /// Abbe number V_d, with the material's IOR as n_d (the `KHR_materials_dispersion` law).
+    pub abbe: Option<f32>,
+}
+
+/// Sellmeier coefficients: `n^2 = 1 + sum b_k l^2 / (l^2 - c_k)`, l in micrometres.
+#[derive(Debug, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct SellmeierExtras {
+    /// B coefficients.
+    pub b: Vec<f64>,
+    /// C coefficients, micrometres squared.
+    pub c: Vec<f64>,
 }
 
 /// The shapes of Blender's area lights.

@@ -3,7 +3,8 @@
 //! Reads the default scene's node tree (nested transforms), triangle meshes with normals and
 //! texture coordinates, metallic-roughness materials with `KHR_materials_transmission`,
 //! `KHR_materials_ior` (absent means 1.5) and `KHR_materials_emissive_strength`,
-//! `KHR_lights_punctual`, the first perspective camera, and the extras schema in [`super::extras`].
+//! `KHR_materials_dispersion`, `KHR_lights_punctual`, the first perspective camera, and the
+//! extras schema in [`super::extras`].
 
 use std::path::Path;
 use std::sync::Arc;
@@ -11,12 +12,12 @@ use std::sync::Arc;
 use glam::{Mat3, Mat4, Vec2, Vec3};
 use gltf::khr_lights_punctual::Kind;
 
-use super::extras::{self, AreaLightExtras, NodeExtras, SceneExtras};
+use super::extras::{self, AreaLightExtras, MaterialExtras, NodeExtras, SceneExtras};
 use super::{shapes, Scene, SceneError, TriangleRef, NOT_A_LIGHT};
 use crate::camera::Camera;
 use crate::lights::{Light, World};
 use crate::materials::{BaseColour, Material, Texture};
-use crate::spectrum::RgbSpectrum;
+use crate::spectrum::{Dispersion, RgbSpectrum};
 
 /// glTF photometric units to watts: Blender writes W * 683 / (4 pi) candela and W/m^2 * 683 lux.
 const LUMENS_PER_WATT: f32 = 683.0;
@@ -115,9 +116,52 @@ fn material(m: &gltf::Material, images: &[gltf::image::Data]) -> Result<Material
         metallic: pbr.metallic_factor().clamp(0.0, 1.0),
         roughness: pbr.roughness_factor().clamp(0.0, 1.0),
         transmission: m.transmission().map_or(0.0, |t| t.transmission_factor()).clamp(0.0, 1.0),
-        ior: m.ior().unwrap_or(1.5),
+        ior: dispersion_law(m).map_err(|e| format!("material '{}': {e}", m.name().unwrap_or("unnamed")))?,
         emission: (emission.max_element() > 0.0).then(|| RgbSpectrum::illuminant(emission)),
         emits_both_sides: true,
+    })
+}
+
+/// The material's index against wavelength: the `caustic` extras first, then
+/// `KHR_materials_dispersion` (read raw: the gltf crate does not type it), then a constant.
+fn dispersion_law(m: &gltf::Material) -> Result<Dispersion, String> {
+    let n_d = m.ior().unwrap_or(1.5);
+    let extras: MaterialExtras = extras::parse(m.extras()).map_err(|e| format!("extras `caustic`: {e}"))?;
+    if let Some(name) = &extras.glass {
+        return Dispersion::glass(name).ok_or_else(|| {
+            format!(
+                "extras `caustic.glass`: unknown glass '{name}' (the catalogue has {})",
+                Dispersion::glass_names().join(", ")
+            )
+        });
+    }
+    if let Some(s) = &extras.sellmeier {
+        if s.b.len() != s.c.len() || s.b.is_empty() || s.b.len() > 4 {
+            return Err(
+                "extras `caustic.sellmeier`: `b` and `c` need the same number of terms, 1 to 4".into()
+            );
+        }
+        let (mut b, mut c) = ([0.0; 4], [0.0; 4]);
+        b[..s.b.len()].copy_from_slice(&s.b);
+        c[..s.c.len()].copy_from_slice(&s.c);
+        return Ok(Dispersion::Sellmeier { b, c });
+    }
+    if let Some(table) = &extras.ior_table {
+        return Dispersion::table(table.iter().map(|&[l, n]| (l, n)).collect())
+            .map_err(|e| format!("extras `caustic.ior_table`: {e}"));
+    }
+    let khr = m.extension_value("KHR_materials_dispersion").and_then(|v| v["dispersion"].as_f64());
+    let v_d = match (extras.abbe, khr) {
+        (Some(v_d), _) if v_d > 0.0 => Some(v_d),
+        (Some(v_d), _) => {
+            return Err(format!("extras `caustic.abbe`: expected a positive Abbe number, got {v_d}"))
+        }
+        (None, Some(dispersion)) if dispersion > 0.0 => Some((20.0 / dispersion) as f32),
+        _ => None,
+    };
+    Ok(match v_d {
+        Some(v_d) => Dispersion::Abbe { n_d, v_d },
+        None => Dispersion::Constant(n_d),
     })
 }
 

@@ -38,6 +38,12 @@ pub fn xyz_to_linear_rec709(xyz: DVec3) -> DVec3 {
     )
 }
 
+/// Linear Rec.709 RGB to XYZ (the inverse of [`xyz_to_linear_rec709`]).
+pub fn linear_rec709_to_xyz(rgb: DVec3) -> DVec3 {
+    let columns = [DVec3::X, DVec3::Y, DVec3::Z].map(xyz_to_linear_rec709);
+    glam::DMat3::from_cols(columns[0], columns[1], columns[2]).inverse() * rgb
+}
+
 /// The XYZ of the normalised D65 (its integral against the colour-matching functions).
 pub fn d65_xyz() -> DVec3 {
     table_wavelengths().map(|l| (cmf(l) * d65(l)).as_dvec3()).sum()
@@ -58,6 +64,13 @@ mod tests {
         assert!((xyz.y - 1.0).abs() < 1e-4, "Y = {}", xyz.y);
         let rgb = xyz_to_linear_rec709(xyz);
         assert!((rgb - DVec3::ONE).abs().max_element() < 1e-4, "{rgb}");
+    }
+
+    #[test]
+    fn y_bar_integrates_to_its_published_value() {
+        // The CIE's 1 nm table of y-bar sums to 106.856895 (CIE 015:2018).
+        let sum: f64 = CIE_Y.iter().map(|&y| f64::from(y)).sum();
+        assert!((sum - 106.856895).abs() < 1e-4, "{sum}");
     }
 
     #[test]

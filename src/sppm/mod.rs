@@ -41,6 +41,8 @@ pub struct SppmSettings {
     pub initial_radius: f64,
     /// The random seed.
     pub seed: u64,
+    /// Render every pass at this wavelength instead of sampling one per pass.
+    pub fixed_wavelength_nm: Option<f32>,
 }
 
 /// What pass `i` shares between all its pixels and photons (DESIGN.md step 1).
@@ -112,7 +114,10 @@ impl<'a> Renderer<'a> {
 
     /// The wavelength and radius of pass `index` (0-based).
     pub fn pass_samples(&self, index: u64) -> PassSamples {
-        let (lambda_nm, lambda_pdf) = sample_visible_wavelength(pass_sample(self.settings.seed, index));
+        let (lambda_nm, lambda_pdf) = match self.settings.fixed_wavelength_nm {
+            Some(lambda_nm) => (lambda_nm, 1.0),
+            None => sample_visible_wavelength(pass_sample(self.settings.seed, index)),
+        };
         let r1_squared = self.settings.initial_radius * self.settings.initial_radius;
         let radius = radius::radius_squared(r1_squared, self.settings.alpha, index + 1).sqrt() as f32;
         PassSamples { index, lambda_nm, lambda_pdf, radius }

@@ -43,7 +43,7 @@ pub fn trace_photon(renderer: &Renderer, pass: &PassSamples, k: u64, out: &mut V
         let surface = scene.surface(hit.triangle, hit.barycentric);
         let material = &scene.materials[surface.material as usize];
         let wo = -direction;
-        let bsdf = material.bsdf(material.reflectance(surface.uv, pass.lambda_nm), rng.next_1d());
+        let bsdf = material.bsdf(surface.uv, pass.lambda_nm, rng.next_1d());
         if !bsdf.is_delta() && depth > 0 {
             let ng = if surface.frame.ng.dot(wo) < 0.0 { -surface.frame.ng } else { surface.frame.ng };
             out.push(Photon { p: surface.p, wi: wo, ng, flux });

@@ -56,7 +56,7 @@ pub fn trace_eye_path(renderer: &Renderer, pass: &PassSamples, pixel: usize) -> 
         let material = &scene.materials[surface.material as usize];
         let wo = -direction;
         result.radiance += beta * material.emitted(pass.lambda_nm, surface.frame.ng, wo);
-        let bsdf = material.bsdf(material.reflectance(surface.uv, pass.lambda_nm), rng.next_1d());
+        let bsdf = material.bsdf(surface.uv, pass.lambda_nm, rng.next_1d());
         if bsdf == Bsdf::Black {
             break;
         }

@@ -27,6 +27,8 @@ pub fn settings(scene: &Path, out: &Path, passes: u64) -> RenderSettings {
         resolution: None,
         seed: 1,
         progress: ProgressStyle::None,
+        wavelength_nm: None,
+        spectral_bins: 0,
     }
 }
 
