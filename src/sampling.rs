@@ -72,18 +72,20 @@ pub fn square_to_cosine_hemisphere(u: Vec2) -> Vec3 {
     Vec3::new(d.x, d.y, (1.0 - d.length_squared()).max(0.0).sqrt())
 }
 
-/// Uniform direction in the cone of half-angle `acos(cos_max)` about +z; density
-/// `1 / (2 pi (1 - cos_max))`.
-pub fn square_to_cone(u: Vec2, cos_max: f32) -> Vec3 {
-    let cos_theta = 1.0 - u.x * (1.0 - cos_max);
-    let sin_theta = (1.0 - cos_theta * cos_theta).max(0.0).sqrt();
+/// Uniform direction in the cone about +z whose half-angle has `1 - cos = one_minus_cos_max`;
+/// density `1 / (2 pi one_minus_cos_max)`. The direction's own `1 - cos theta` is
+/// `u.x * one_minus_cos_max`, which callers may use for precise falloffs.
+pub fn square_to_cone(u: Vec2, one_minus_cos_max: f32) -> Vec3 {
+    let one_minus_cos = u.x * one_minus_cos_max;
+    let cos_theta = 1.0 - one_minus_cos;
+    let sin_theta = (one_minus_cos * (2.0 - one_minus_cos)).max(0.0).sqrt();
     let phi = std::f32::consts::TAU * u.y;
     Vec3::new(sin_theta * phi.cos(), sin_theta * phi.sin(), cos_theta)
 }
 
 /// Uniform direction on the sphere; density `1 / (4 pi)`.
 pub fn square_to_sphere(u: Vec2) -> Vec3 {
-    square_to_cone(u, -1.0)
+    square_to_cone(u, 2.0)
 }
 
 /// Uniform barycentric coordinates (b1, b2) on a triangle (Heitz 2019, "A Low-Distortion Map

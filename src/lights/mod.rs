@@ -17,7 +17,7 @@ pub use world::World;
 use glam::{Vec2, Vec3};
 use std::f32::consts::PI;
 
-use crate::geometry::offset_origin;
+use crate::geometry::{offset_origin, one_minus_cos_between, Cone};
 use crate::sampling::{
     basis, square_to_cone, square_to_cosine_hemisphere, square_to_disc, square_to_sphere, square_to_triangle,
 };
@@ -50,10 +50,10 @@ pub enum Light {
         axis: Vec3,
         /// Radiant intensity on the axis, W/sr.
         intensity: RgbSpectrum,
-        /// Cosine of the inner cone angle (full intensity inside).
-        cos_inner: f32,
-        /// Cosine of the outer cone angle (no light outside).
-        cos_outer: f32,
+        /// The inner cone (full intensity inside).
+        inner: Cone,
+        /// The outer cone (no light outside).
+        outer: Cone,
     },
     /// A distant light with an angular diameter (soft shadows) or none.
     Sun {
@@ -61,8 +61,8 @@ pub enum Light {
         direction: Vec3,
         /// Irradiance on a plane facing the sun, W/m^2.
         irradiance: RgbSpectrum,
-        /// Cosine of the sun's angular radius (1 for a delta sun).
-        cos_max: f32,
+        /// The sun's disc as a cone of directions (zero for a delta sun).
+        disc: Cone,
         /// Where its photons start.
         sphere: BoundingSphere,
     },
@@ -108,10 +108,14 @@ fn spectral(shape: &RgbSpectrum, lambda_nm: f32) -> f32 {
     shape.eval(lambda_nm) * d65(lambda_nm)
 }
 
-/// glTF's spot falloff: the square of a linear ramp between the outer and inner cone.
-fn spot_falloff(cos_theta: f32, cos_inner: f32, cos_outer: f32) -> f32 {
-    let scale = 1.0 / (cos_inner - cos_outer).max(1e-4);
-    ((cos_theta - cos_outer) * scale).clamp(0.0, 1.0).powi(2)
+/// glTF's spot falloff: the square of a linear ramp in cosine between the outer and inner cone,
+/// for a direction whose `1 - cos` from the axis is `one_minus_cos`.
+fn spot_falloff(one_minus_cos: f32, inner: Cone, outer: Cone) -> f32 {
+    let width = outer.one_minus_cos - inner.one_minus_cos;
+    if width <= 0.0 {
+        return if one_minus_cos <= outer.one_minus_cos { 1.0 } else { 0.0 };
+    }
+    ((outer.one_minus_cos - one_minus_cos) / width).clamp(0.0, 1.0).powi(2)
 }
 
 /// A point on the disc of `sphere` facing `direction`, upstream of the scene.
@@ -139,9 +143,7 @@ impl Light {
     pub fn power(&self) -> f64 {
         let power = match self {
             Light::Point { intensity, .. } => 4.0 * PI as f64 * intensity.luminance(),
-            Light::Spot { intensity, cos_outer, .. } => {
-                2.0 * PI as f64 * (1.0 - f64::from(*cos_outer)) * intensity.luminance()
-            }
+            Light::Spot { intensity, outer, .. } => f64::from(outer.solid_angle()) * intensity.luminance(),
             Light::Sun { irradiance, sphere, .. } => {
                 irradiance.luminance() * f64::from(PI * sphere.radius * sphere.radius)
             }
@@ -169,18 +171,18 @@ impl Light {
                 let radiance_over_pdf = spectral(intensity, lambda_nm) / (distance * distance);
                 Some(LightSample { wi, distance, radiance_over_pdf, pdf: 0.0 })
             }
-            Light::Spot { position, axis, intensity, cos_inner, cos_outer } => {
+            Light::Spot { position, axis, intensity, inner, outer } => {
                 let (wi, distance) = direction_and_distance(p, *position)?;
-                let falloff = spot_falloff(-wi.dot(*axis), *cos_inner, *cos_outer);
+                let falloff = spot_falloff(one_minus_cos_between(-wi, *axis), *inner, *outer);
                 let radiance_over_pdf = spectral(intensity, lambda_nm) * falloff / (distance * distance);
                 (falloff > 0.0).then_some(LightSample { wi, distance, radiance_over_pdf, pdf: 0.0 })
             }
-            Light::Sun { direction, irradiance, cos_max, .. } => {
+            Light::Sun { direction, irradiance, disc, .. } => {
                 let (t, b) = basis(-*direction);
-                let local = square_to_cone(u, *cos_max);
+                let local = square_to_cone(u, disc.one_minus_cos);
                 let wi = (t * local.x + b * local.y - *direction * local.z).normalize();
                 let radiance_over_pdf = spectral(irradiance, lambda_nm);
-                let pdf = if *cos_max < 1.0 { 1.0 / cone_solid_angle(*cos_max) } else { 0.0 };
+                let pdf = if disc.is_delta() { 0.0 } else { 1.0 / disc.solid_angle() };
                 Some(LightSample { wi, distance: f32::INFINITY, radiance_over_pdf, pdf })
             }
             Light::Triangle { corners, radiance, .. } => {
@@ -214,8 +216,8 @@ impl Light {
                 }
                 p.distance_squared(q) / (triangle_area(corners) * cos_light)
             }
-            Light::Sun { direction, cos_max, .. } if *cos_max < 1.0 && -direction.dot(wi) >= *cos_max => {
-                1.0 / cone_solid_angle(*cos_max)
+            Light::Sun { direction, disc, .. } if !disc.is_delta() && disc.contains(-*direction, wi) => {
+                1.0 / disc.solid_angle()
             }
             Light::World(world) => world.pdf(wi),
             _ => 0.0,
@@ -226,10 +228,10 @@ impl Light {
     /// (distant lights with a solid angle: the world, a sun with an angular diameter).
     pub fn escaped_radiance(&self, dir: Vec3, lambda_nm: f32) -> f32 {
         match self {
-            Light::Sun { direction, irradiance, cos_max, .. }
-                if *cos_max < 1.0 && -direction.dot(dir) >= *cos_max =>
+            Light::Sun { direction, irradiance, disc, .. }
+                if !disc.is_delta() && disc.contains(-*direction, dir) =>
             {
-                spectral(irradiance, lambda_nm) / cone_solid_angle(*cos_max)
+                spectral(irradiance, lambda_nm) / disc.solid_angle()
             }
             Light::World(world) => world.radiance(dir, lambda_nm),
             _ => 0.0,
@@ -244,20 +246,20 @@ impl Light {
                 direction: square_to_sphere(u_direction),
                 flux: spectral(intensity, lambda_nm) * 4.0 * PI,
             },
-            Light::Spot { position, axis, intensity, cos_inner, cos_outer } => {
+            Light::Spot { position, axis, intensity, inner, outer } => {
                 let (t, b) = basis(*axis);
-                let local = square_to_cone(u_direction, *cos_outer);
-                let falloff = spot_falloff(local.z, *cos_inner, *cos_outer);
-                let solid_angle = 2.0 * PI * (1.0 - cos_outer);
+                let local = square_to_cone(u_direction, outer.one_minus_cos);
+                let falloff = spot_falloff(u_direction.x * outer.one_minus_cos, *inner, *outer);
+                let solid_angle = outer.solid_angle();
                 EmittedPhoton {
                     origin: *position,
                     direction: (t * local.x + b * local.y + *axis * local.z).normalize(),
                     flux: spectral(intensity, lambda_nm) * falloff * solid_angle,
                 }
             }
-            Light::Sun { direction, irradiance, cos_max, sphere } => {
+            Light::Sun { direction, irradiance, disc, sphere } => {
                 let (t, b) = basis(*direction);
-                let local = square_to_cone(u_direction, *cos_max);
+                let local = square_to_cone(u_direction, disc.one_minus_cos);
                 let direction = (t * local.x + b * local.y + *direction * local.z).normalize();
                 EmittedPhoton {
                     origin: disc_origin(sphere, direction, u_position),
@@ -300,11 +302,6 @@ impl Light {
         };
         (photon.flux > 0.0 && photon.flux.is_finite()).then_some(photon)
     }
-}
-
-/// The solid angle of a cone of half-angle `acos(cos_max)`.
-fn cone_solid_angle(cos_max: f32) -> f32 {
-    2.0 * PI * (1.0 - cos_max)
 }
 
 /// Unit direction from `p` to `q` and their distance; `None` if they coincide.

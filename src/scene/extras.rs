@@ -19,6 +19,8 @@ pub struct SceneExtras {
     pub resolution: Option<[u32; 2]>,
     /// The world's light.
     pub world: Option<WorldExtras>,
+    /// A regression scene's analytic question (read by its tests; the renderer ignores it).
+    pub regression: Option<serde_json::Value>,
 }
 
 /// The world: a uniform colour, or an equirectangular image, times a strength.

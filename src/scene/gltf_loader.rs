@@ -15,6 +15,7 @@ use gltf::khr_lights_punctual::Kind;
 use super::extras::{self, AreaLightExtras, MaterialExtras, NodeExtras, SceneExtras};
 use super::{shapes, Scene, SceneError, TriangleRef, NOT_A_LIGHT};
 use crate::camera::Camera;
+use crate::geometry::Cone;
 use crate::lights::{Light, World};
 use crate::materials::{BaseColour, Material, Texture};
 use crate::spectrum::{Dispersion, RgbSpectrum};
@@ -191,9 +192,9 @@ fn world(w: &extras::WorldExtras, gltf_path: &Path) -> Result<World, String> {
     }
 }
 
-/// Blender's sun angle is the full angular diameter; a delta sun has cos_max = 1.
-fn sun_cos_max(extras: &NodeExtras) -> f32 {
-    extras.sun_angle_deg.map_or(1.0, |deg| (deg.to_radians() / 2.0).cos())
+/// Blender's sun angle is the full angular diameter; without one the sun is a delta light.
+fn sun_disc(extras: &NodeExtras) -> Cone {
+    extras.sun_angle_deg.map_or(Cone::default(), |deg| Cone::from_half_angle(deg.to_radians() / 2.0))
 }
 
 impl Builder<'_> {
@@ -254,15 +255,15 @@ impl Builder<'_> {
                 position,
                 axis,
                 intensity: spectrum,
-                cos_inner: inner_cone_angle.cos(),
-                cos_outer: outer_cone_angle.cos(),
+                inner: Cone::from_half_angle(inner_cone_angle),
+                outer: Cone::from_half_angle(outer_cone_angle),
             },
             Kind::Directional => {
                 self.suns.push(self.scene.lights.len());
                 Light::Sun {
                     direction: axis,
                     irradiance: spectrum,
-                    cos_max: sun_cos_max(extras),
+                    disc: sun_disc(extras),
                     sphere: Default::default(),
                 }
             }
@@ -363,9 +364,9 @@ impl Builder<'_> {
         scene.camera = self.camera.ok_or("the scene has no camera: add a perspective camera")?;
         let sphere = scene.bounding_sphere();
         for &i in &self.suns {
-            if let Light::Sun { sphere: s, cos_max, .. } = &mut scene.lights[i] {
+            if let Light::Sun { sphere: s, disc, .. } = &mut scene.lights[i] {
                 *s = sphere;
-                if *cos_max < 1.0 {
+                if !disc.is_delta() {
                     scene.distant_lights.push(i);
                 }
             }
