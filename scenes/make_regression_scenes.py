@@ -61,6 +61,18 @@ class Gltf:
         self.doc["meshes"].append({"name": name, "primitives": [{"attributes": attributes, "material": material}]})
         self.node({"name": name, "mesh": len(self.doc["meshes"]) - 1})
 
+    def indexed_mesh(self, name, positions, normals, indices, material):
+        offset = len(self.buffer)
+        self.buffer += struct.pack(f"<{len(indices)}I", *indices)
+        self.doc["bufferViews"].append({"buffer": 0, "byteOffset": offset, "byteLength": 4 * len(indices)})
+        self.doc["accessors"].append({"bufferView": len(self.doc["bufferViews"]) - 1, "componentType": 5125,
+                                      "count": len(indices), "type": "SCALAR"})
+        index_accessor = len(self.doc["accessors"]) - 1
+        attributes = {"POSITION": self._accessor(positions, "VEC3"), "NORMAL": self._accessor(normals, "VEC3")}
+        primitive = {"attributes": attributes, "indices": index_accessor, "material": material}
+        self.doc["meshes"].append({"name": name, "primitives": [primitive]})
+        self.node({"name": name, "mesh": len(self.doc["meshes"]) - 1})
+
     def extension(self, name):
         if name not in self.doc["extensionsUsed"]:
             self.doc["extensionsUsed"].append(name)
@@ -200,25 +212,25 @@ def prism_scene(name, glass_extras, ior):
     gltf.write(name)
 
 
-def sphere_triangles(radius, segments, rings):
-    def point(i, j):
-        theta, phi = math.pi * j / rings, 2 * math.pi * i / segments
-        return [radius * math.sin(theta) * math.cos(phi), radius * math.cos(theta), radius * math.sin(theta) * math.sin(phi)]
-
-    triangles, normals = [], []
+def uv_sphere(radius, segments, rings):
+    """Shared vertices with exact normals, and triangles wound counter-clockwise from outside."""
+    positions, normals = [], []
+    for j in range(rings + 1):
+        theta = math.pi * j / rings
+        for i in range(segments + 1):
+            phi = 2 * math.pi * i / segments
+            n = [math.sin(theta) * math.cos(phi), math.cos(theta), -math.sin(theta) * math.sin(phi)]
+            normals.append(n)
+            positions.append([radius * x for x in n])
+    indices = []
     for j in range(rings):
         for i in range(segments):
-            p = [point(i, j), point(i + 1, j), point(i + 1, j + 1), point(i, j + 1)]
-            for t in ([p[0], p[2], p[1]], [p[0], p[3], p[2]]):
-                if face_normal_safe(t):
-                    triangles.append(t)
-                    normals.append([normalize(v) for v in t])
-    return triangles, normals
-
-
-def face_normal_safe(t):
-    n = cross(sub(t[1], t[0]), sub(t[2], t[0]))
-    return sum(x * x for x in n) > 1e-18
+            a, b = j * (segments + 1) + i, (j + 1) * (segments + 1) + i
+            if j > 0:
+                indices += [a, b, a + 1]
+            if j < rings - 1:
+                indices += [a + 1, b, b + 1]
+    return positions, normals, indices
 
 
 SCREEN_Z = 20.0
@@ -227,16 +239,8 @@ SCREEN_Z = 20.0
 def rainbow_scene():
     gltf = Gltf()
     water = glass_material(gltf, "Water", {"glass": "water"})
-    triangles, normals = sphere_triangles(1.0, 192, 96)
-    # Wind outward: the generator's triangles may face in; flip those.
-    fixed_t, fixed_n = [], []
-    for t, n in zip(triangles, normals):
-        centre = [sum(v[k] for v in t) / 3 for k in range(3)]
-        if sum(a * b for a, b in zip(face_normal(t), centre)) < 0:
-            t, n = [t[0], t[2], t[1]], [n[0], n[2], n[1]]
-        fixed_t.append(t)
-        fixed_n.append(n)
-    gltf.mesh("WaterDrop", fixed_t, water, fixed_n)
+    positions, normals, indices = uv_sphere(1.0, 96, 48)
+    gltf.indexed_mesh("WaterDrop", positions, normals, indices, water)
     # A nearly parallel beam from far along +z, just covering the drop.
     spot(gltf, [0.0, 0.0, 1000.0], [0.0, 0.0, -1.0], math.degrees(math.atan(1.02 / 1000.0)), 2.0e9)
     # The screen at z = 20 facing the drop, with a 3 x 3 hole for the beam.
@@ -244,8 +248,10 @@ def rainbow_scene():
     for cx, cy, hx, hy in [(0, 14.25, 30, 12.75), (0, -14.25, 30, 12.75), (-16.5, 0, 13.5, 1.5), (16.5, 0, 13.5, 1.5)]:
         screen += quad([cx, cy, SCREEN_Z], [0, 1, 0], [1, 0, 0], hy, hx)
     gltf.mesh("Screen", screen, gltf.material(WHITE))
-    camera(gltf, [0.0, 0.0, 2.0], [0.0, 0.0, 1.0], 2 * math.atan(27.0 / 18.0))
-    gltf.doc["scenes"][0]["extras"] = {"caustic": {"resolution": [256, 256], "regression": {
+    # The camera looks at where the bow crosses the screen's +x axis, close enough to resolve
+    # 0.1 degree of bow angle per pixel.
+    camera(gltf, [0.0, 0.0, 2.0], [17.6, 0.0, 18.0], 0.12, aspect=2.0)
+    gltf.doc["scenes"][0]["extras"] = {"caustic": {"resolution": [256, 128], "regression": {
         "drop_radius": 1.0, "beam_origin_z": 1000.0, "screen_z": SCREEN_Z}}}
     gltf.write("rainbow")
 

@@ -148,26 +148,133 @@ fn prism_bands_land_where_snells_law_puts_them() {
     );
 }
 
-/// Chromatic spread of a band: the largest |r / g - 1| or |b / g - 1| over its bright pixels.
-fn colour_fringe(image: &Image) -> f64 {
-    let peak = (0..image.rgb.len()).map(|i| image.rgb[i][1]).fold(0.0, f64::max);
-    image
-        .rgb
-        .iter()
-        .filter(|c| c[1] > 0.3 * peak)
-        .map(|c| ((c[0] / c[1] - 1.0).abs()).max((c[2] / c[1] - 1.0).abs()))
-        .fold(0.0, f64::max)
+/// The centroid (pixels) of one colour channel over the whole image.
+fn channel_centroid(image: &Image, channel: usize) -> DVec2 {
+    let (mut sum, mut weight) = (DVec2::ZERO, 0.0);
+    for (i, c) in image.rgb.iter().enumerate() {
+        let v = c[channel].max(0.0);
+        sum += DVec2::new((i % image.width) as f64 + 0.5, (i / image.width) as f64 + 0.5) * v;
+        weight += v;
+    }
+    sum / weight
 }
 
-/// A prism whose index does not change with wavelength makes one white band: every bright pixel
-/// within 10% of grey (chromaticity noise of 64 passes); the dispersive prism must spread far more.
+/// A prism whose index does not change with wavelength makes one white band: its red and blue
+/// light land in the same place (centroids within 0.5 pixel) and together are white (each
+/// channel's total within 5% of green's). The SF11 prism must separate red from blue by more than
+/// 20 pixels, so the measure can fail.
 #[test]
 fn a_prism_without_dispersion_makes_one_white_band() {
+    let fringe = |image: &Image| (channel_centroid(image, 0) - channel_centroid(image, 2)).length();
     let constant = render_at(&bundled_scene("prism_constant.gltf"), None, 64, 20_000);
-    let fringe = colour_fringe(&constant);
-    assert!(fringe < 0.10, "constant index: colour fringe {fringe:.3}");
-    let dispersive = render_at(&bundled_scene("prism.gltf"), None, 64, 20_000);
-    let spread = colour_fringe(&dispersive);
-    eprintln!("colour fringe: constant index {fringe:.3}, SF11 {spread:.3}");
-    assert!(spread > 1.0, "SF11: colour spread only {spread:.3}");
+    let total = constant.mean_all();
+    let (fringe_constant, fringe_sf11) =
+        (fringe(&constant), fringe(&render_at(&bundled_scene("prism.gltf"), None, 64, 20_000)));
+    eprintln!("red-blue separation: constant index {fringe_constant:.3} px, SF11 {fringe_sf11:.1} px; band colour {total:?}");
+    assert!(fringe_constant < 0.5, "constant index: red and blue {fringe_constant:.3} px apart");
+    for c in [0, 2] {
+        assert!(
+            (total[c] / total[1] - 1.0).abs() < 0.05,
+            "constant index: band colour {total:?} is not white"
+        );
+    }
+    assert!(fringe_sf11 > 20.0, "SF11: red and blue only {fringe_sf11:.1} px apart");
+}
+
+/// Descartes' primary rainbow: the angle (degrees) between the bow's rays and the direction back
+/// toward the light, 180 - D_min with D(i) = 180 + 2i - 4r and cos^2 i = (n^2 - 1) / 3 at the minimum.
+fn descartes_angle_deg(n: f64) -> f64 {
+    let i = ((n * n - 1.0) / 3.0).sqrt().acos();
+    let r = (i.sin() / n).asin();
+    let deviation = std::f64::consts::PI + 2.0 * i - 4.0 * r;
+    180.0 - deviation.to_degrees()
+}
+
+/// The ray of minimum deviation through a drop of radius 1 at the origin, lit along -z: where it
+/// leaves the drop, (|x|, z) in its meridional plane.
+fn descartes_exit_point(n: f64) -> DVec2 {
+    let i = ((n * n - 1.0) / 3.0).sqrt().acos();
+    let r = (i.sin() / n).asin();
+    // Entry at polar angle i from +z; each chord inside turns the polar angle by pi - 2r.
+    let exit_polar = i + 2.0 * (std::f64::consts::PI - 2.0 * r);
+    DVec2::new(exit_polar.sin().abs(), exit_polar.cos())
+}
+
+/// The radius on the screen plane (distance from the z axis) of the point each pixel sees.
+fn screen_radius_of_pixels(scene: &Scene, width: usize, height: usize, screen_z: f32) -> Vec<f64> {
+    let aspect = width as f32 / height as f32;
+    (0..width * height)
+        .map(|i| {
+            let film = glam::Vec2::new((i % width) as f32 + 0.5, (i / width) as f32 + 0.5)
+                / glam::Vec2::new(width as f32, height as f32);
+            let (o, d): (Vec3, Vec3) = scene.camera.ray(film, aspect);
+            let p = o + d * ((screen_z - o.z) / d.z);
+            f64::from(p.truncate().length())
+        })
+        .collect()
+}
+
+/// The radius (screen units) where the luminance, averaged in rings of `bin` width and smoothed
+/// over three rings, peaks.
+fn bow_radius(image: &Image, radii: &[f64], bin: f64) -> f64 {
+    let (low, high) =
+        (radii.iter().copied().fold(f64::MAX, f64::min), radii.iter().copied().fold(0.0, f64::max));
+    let bins = ((high - low) / bin) as usize + 1;
+    let (mut sum, mut count) = (vec![0.0; bins], vec![0usize; bins]);
+    for (i, &rho) in radii.iter().enumerate() {
+        let k = ((rho - low) / bin) as usize;
+        sum[k] += image.luminance(i % image.width, i % image.width + 1, i / image.width, i / image.width + 1);
+        count[k] += 1;
+    }
+    let mean: Vec<f64> =
+        sum.iter().zip(&count).map(|(s, &c)| if c > 20 { s / c as f64 } else { 0.0 }).collect();
+    let smoothed: Vec<f64> =
+        (0..bins).map(|k| mean[k.saturating_sub(1)..(k + 2).min(bins)].iter().sum::<f64>()).collect();
+    let peak = (0..bins).max_by(|&a, &b| smoothed[a].total_cmp(&smoothed[b])).unwrap();
+    low + (peak as f64 + 0.5) * bin
+}
+
+/// The water drop's primary rainbow at 450 and 650 nm: the bow on the screen, seen from where
+/// the bow's ray leaves the drop, is at Descartes' angle for water's index there (0.5 degrees).
+#[test]
+fn rainbow_angles_match_descartes() {
+    let path = bundled_scene("rainbow.gltf");
+    let question = regression(&path);
+    let screen_z = question["screen_z"].as_f64().unwrap();
+    let scene = Scene::load(&path).unwrap();
+    let water = Dispersion::glass("water").unwrap();
+    let mut angles = Vec::new();
+    for lambda in [450.0, 650.0] {
+        let dir = tempfile::tempdir().unwrap();
+        let mut s = settings(&path, dir.path(), 24);
+        s.wavelength_nm = Some(lambda);
+        s.photons = Some(400_000);
+        s.radius = Some(0.03);
+        let image = render(&s, 2);
+        let radii = screen_radius_of_pixels(&scene, image.width, image.height, screen_z as f32);
+        let rho = bow_radius(&image, &radii, 0.02);
+        let n = f64::from(water.index(lambda));
+        let exit = descartes_exit_point(n);
+        let measured = ((rho - exit.x) / (screen_z - exit.y)).atan().to_degrees();
+        let expected = descartes_angle_deg(n);
+        eprintln!(
+            "rainbow at {lambda} nm (n = {n:.5}): bow at {measured:.3} deg, Descartes {expected:.3} deg"
+        );
+        assert!(
+            (measured - expected).abs() < 0.5,
+            "{lambda} nm: bow at {measured:.3} deg, Descartes {expected:.3}"
+        );
+        angles.push(measured);
+    }
+    assert!(angles[1] > angles[0], "red's bow must be outside blue's: {angles:?}");
+}
+
+/// The spectral prism render against its stored reference (tests/references/prism.exr, made
+/// with `CAUSTIC_BLESS=1` from a 256-pass render): any change to dispersion, refraction or the
+/// spectral film shows up here.
+#[test]
+fn prism_matches_its_reference() {
+    let passes = std::env::var("CAUSTIC_BLESS").map_or(64, |_| 256);
+    let image = render_at(&bundled_scene("prism.gltf"), None, passes, 20_000);
+    assert_matches_reference("prism", &image, passes);
 }

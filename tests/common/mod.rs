@@ -90,11 +90,12 @@ pub fn read_exr(path: &Path) -> Image {
     let layer = &image.layer_data[0];
     let size = layer.size;
     let channel = |name: &str| {
+        let short = name.trim_start_matches("Combined.");
         let c = layer
             .channel_data
             .list
             .iter()
-            .find(|c| c.name.to_string() == name)
+            .find(|c| c.name.to_string() == name || c.name.to_string() == short)
             .unwrap_or_else(|| panic!("{}: no channel {name}", path.display()));
         c.sample_data.values_as_f32().collect::<Vec<f32>>()
     };
@@ -319,4 +320,85 @@ pub fn write_edited(original: &Path, dir: &Path, edit: impl FnOnce(&mut Value)) 
     let path = dir.join(original.file_name().unwrap());
     std::fs::write(&path, serde_json::to_string(&doc).unwrap()).unwrap();
     path
+}
+
+/// Writes `image` as an RGB EXR (for references and failure reports).
+pub fn write_image(path: &Path, image: &Image) {
+    let (w, h) = (image.width, image.height);
+    std::fs::create_dir_all(path.parent().unwrap()).unwrap();
+    exr::prelude::write_rgb_file(path, w, h, |x, y| {
+        let c = image.rgb[y * w + x];
+        (c[0] as f32, c[1] as f32, c[2] as f32)
+    })
+    .unwrap();
+}
+
+/// The image averaged over `block` x `block` pixel blocks.
+pub fn block_means(image: &Image, block: usize) -> Image {
+    let (width, height) = (image.width / block, image.height / block);
+    let rgb = (0..width * height)
+        .map(|i| {
+            let (x, y) = ((i % width) * block, (i / width) * block);
+            image.mean(x, x + block, y, y + block)
+        })
+        .collect();
+    Image { width, height, rgb }
+}
+
+/// Compares `image` (rendered with `passes` passes) with `tests/references/NAME.exr`, which
+/// holds its 8x8 block means (a small file).
+///
+/// Each block's luminance must be within `2 / sqrt(passes)` of the reference's, relative, or
+/// 0.002 absolute for dark blocks: SPPM noise falls at least as fast as 1 / sqrt(passes), so the
+/// tolerance shrinks with the pass count. On failure the image, the reference and their absolute
+/// difference (per block) are written to `tests/failures/NAME/` and named in the message. With
+/// `CAUSTIC_BLESS=1` the image becomes the new reference instead.
+pub fn assert_matches_reference(name: &str, image: &Image, passes: u64) {
+    let root = Path::new(env!("CARGO_MANIFEST_DIR")).join("tests");
+    let reference_path = root.join("references").join(format!("{name}.exr"));
+    let blocks = block_means(image, 8);
+    if std::env::var("CAUSTIC_BLESS").as_deref() == Ok("1") {
+        write_image(&reference_path, &blocks);
+        return;
+    }
+    let reference = read_exr(&reference_path);
+    assert_eq!(
+        (reference.width, reference.height),
+        (blocks.width, blocks.height),
+        "{name}: size differs from its reference"
+    );
+    let relative = 2.0 / (passes as f64).sqrt();
+    let mut failures = Vec::new();
+    for i in 0..blocks.rgb.len() {
+        let (x, y) = (i % blocks.width, i / blocks.width);
+        let (a, b) = (blocks.luminance(x, x + 1, y, y + 1), reference.luminance(x, x + 1, y, y + 1));
+        if (a - b).abs() > (relative * b).max(0.002) {
+            failures.push(format!("block ({x}, {y}): {a:.4} vs reference {b:.4}"));
+        }
+    }
+    if failures.is_empty() {
+        return;
+    }
+    let folder = root.join("failures").join(name);
+    write_image(&folder.join("image.exr"), image);
+    write_image(&folder.join("reference.exr"), &reference);
+    let difference = Image {
+        width: blocks.width,
+        height: blocks.height,
+        rgb: blocks
+            .rgb
+            .iter()
+            .zip(&reference.rgb)
+            .map(|(a, b)| [0, 1, 2].map(|c| (a[c] - b[c]).abs()))
+            .collect(),
+    };
+    write_image(&folder.join("difference.exr"), &difference);
+    panic!(
+        "{name}: {} blocks differ from {} beyond {:.1}% (the tolerance for {passes} passes); image, reference and difference written to {}: {}",
+        failures.len(),
+        reference_path.display(),
+        relative * 100.0,
+        folder.display(),
+        failures.iter().take(5).cloned().collect::<Vec<_>>().join("; ")
+    );
 }
