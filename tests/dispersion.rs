@@ -278,3 +278,70 @@ fn prism_matches_its_reference() {
     let image = render_at(&bundled_scene("prism.gltf"), None, passes, 20_000);
     assert_matches_reference("prism", &image, passes);
 }
+
+/// `--spectral-bins`: an emitting panel of radiance 2 D65 seen straight on; each band's channel
+/// must hold the band's mean of 2 D65 (2%: the only noise is where the 4096 stratified
+/// wavelengths fall; the reddest band, where their density is lowest, gets about 60).
+#[test]
+fn spectral_bins_hold_each_bands_mean_radiance() {
+    let dir = tempfile::tempdir().unwrap();
+    let mut gltf = GltfBuilder::default();
+    let panel = gltf.material(serde_json::json!({"emissiveFactor": [1.0, 1.0, 1.0],
+        "extensions": {"KHR_materials_emissive_strength": {"emissiveStrength": 2.0}},
+        "pbrMetallicRoughness": {"baseColorFactor": [0.0, 0.0, 0.0, 1.0]}}));
+    gltf.quad_y("Panel", 0.0, 5.0, true, panel);
+    gltf.camera([0.0, 1.0, 0.0], [0.0, -1.0, 0.0], 0.5);
+    let scene = gltf.write(dir.path(), "panel");
+    let out = dir.path().to_str().unwrap();
+    let args = ["render", scene.to_str().unwrap(), "-o", out, "--passes", "4096", "--resolution", "4x4"];
+    let output = run_caustic(&[&args[..], &["--progress", "none", "--spectral-bins", "10"]].concat());
+    assert!(output.status.success(), "{}", String::from_utf8_lossy(&output.stderr));
+    let image = exr::prelude::read_all_flat_layers_from_file(dir.path().join("frame_0001.exr")).unwrap();
+    let channels = &image.layer_data[0].channel_data.list;
+    for k in 0..10 {
+        let (low, high) = (360.0 + 47.0 * k as f32, 360.0 + 47.0 * (k + 1) as f32);
+        let name = format!("Spectral.{:.0}nm", (low + high) / 2.0);
+        let channel = channels
+            .iter()
+            .find(|c| c.name.to_string() == name)
+            .unwrap_or_else(|| panic!("no channel {name}"));
+        let values: Vec<f32> = channel.sample_data.values_as_f32().collect();
+        let mean = values.iter().map(|&v| f64::from(v)).sum::<f64>() / values.len() as f64;
+        let band = (0..470).map(|i| low + (high - low) * (i as f32 + 0.5) / 470.0);
+        let expected = band.map(|l| 2.0 * f64::from(caustic::spectrum::d65(l))).sum::<f64>() / 470.0;
+        assert!((mean / expected - 1.0).abs() < 0.02, "{name}: {mean} vs {expected}");
+    }
+}
+
+/// Materials name their dispersion: a catalogue glass, an Abbe number, or
+/// `KHR_materials_dispersion` (20 / V_d); an unknown glass is an error listing the catalogue.
+#[test]
+fn materials_read_their_dispersion() {
+    let dir = tempfile::tempdir().unwrap();
+    let scene_with = |material: Value| {
+        let mut gltf = GltfBuilder::default();
+        let m = gltf.material(material);
+        gltf.quad_y("Glass", 0.0, 1.0, true, m);
+        gltf.camera([0.0, 1.0, 0.0], [0.0, -1.0, 0.0], 0.5);
+        gltf.write(dir.path(), "scene")
+    };
+    let khr = serde_json::json!({"extensions": {"KHR_materials_dispersion": {"dispersion": 0.5}, "KHR_materials_ior": {"ior": 1.6}}});
+    let scene = Scene::load(&scene_with(khr)).unwrap();
+    assert_eq!(scene.materials[0].ior, Dispersion::Abbe { n_d: 1.6, v_d: 40.0 });
+    let named = serde_json::json!({"extras": {"caustic": {"glass": "diamond"}}});
+    assert_eq!(
+        Scene::load(&scene_with(named)).unwrap().materials[0].ior,
+        Dispersion::glass("diamond").unwrap()
+    );
+    let abbe = serde_json::json!({"extras": {"caustic": {"abbe": 30.0}}});
+    assert_eq!(
+        Scene::load(&scene_with(abbe)).unwrap().materials[0].ior,
+        Dispersion::Abbe { n_d: 1.5, v_d: 30.0 }
+    );
+    let unknown = serde_json::json!({"name": "Gem", "extras": {"caustic": {"glass": "kryptonite"}}});
+    let message = Scene::load(&scene_with(unknown)).unwrap_err().to_string();
+    assert!(
+        message.contains("Gem") && message.contains("kryptonite") && message.contains("BK7"),
+        "{message}"
+    );
+}
