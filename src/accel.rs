@@ -1,9 +1,12 @@
-//! Ray queries against the scene's triangles: a compressed wide BVH (obvhs' CWBVH, Ylitie et al.
-//! 2017) built once from world-space triangles.
+//! Ray queries against the scene's triangles: compressed wide BVHs (obvhs' CWBVH, Ylitie et al.
+//! 2017) over world-space triangles, one for the fixed part of a time range (built once, shared)
+//! and one for the moving part (built per pose, small).
 //!
-//! Takes the scene's triangle corners; gives closest hits (triangle index, distance, barycentrics)
-//! and occlusion tests.
+//! Takes triangle corners; gives closest hits (triangle index, distance, barycentrics) and
+//! occlusion tests. Triangle indices number the fixed part first, then the moving part, as
+//! `Scene` does.
 
+use std::sync::Arc;
 use std::time::Duration;
 
 use glam::{Vec2, Vec3};
@@ -25,21 +28,56 @@ pub struct Hit {
     pub barycentric: Vec2,
 }
 
-/// The BVH over the scene's triangles.
-pub struct Accel {
+/// One BVH over a list of triangles.
+pub struct Bvh {
     bvh: Option<CwBvh>,
     triangles: Vec<Triangle>,
 }
 
+/// The scene's BVHs: the fixed part (shared between poses) and the moving part.
+pub struct Accel {
+    fixed: Arc<Bvh>,
+    moving: Bvh,
+    fixed_count: u32,
+}
+
 impl Accel {
-    /// Builds the BVH over `corners` (one entry per triangle, in scene order).
+    /// A BVH over `corners`, all fixed.
+    pub fn build(corners: &[[Vec3; 3]]) -> Self {
+        Accel::new(Arc::new(Bvh::build(corners)), &[])
+    }
+
+    /// The fixed part's BVH with one built over `moving` (numbered after the fixed triangles).
+    pub fn new(fixed: Arc<Bvh>, moving: &[[Vec3; 3]]) -> Self {
+        let fixed_count = fixed.triangles.len() as u32;
+        Accel { fixed, moving: Bvh::build(moving), fixed_count }
+    }
+
+    /// The closest hit along the ray from `origin` in the unit `direction` before `t_max`.
+    pub fn intersect(&self, origin: Vec3, direction: Vec3, t_max: f32) -> Option<Hit> {
+        let fixed = self.fixed.intersect(origin, direction, t_max);
+        let moving = self.moving.intersect(origin, direction, fixed.map_or(t_max, |h| h.t));
+        match moving {
+            Some(hit) => Some(Hit { triangle: hit.triangle + self.fixed_count, ..hit }),
+            None => fixed,
+        }
+    }
+
+    /// Whether anything lies on the ray from `origin` in the unit `direction` before `t_max`.
+    pub fn occluded(&self, origin: Vec3, direction: Vec3, t_max: f32) -> bool {
+        self.fixed.occluded(origin, direction, t_max) || self.moving.occluded(origin, direction, t_max)
+    }
+}
+
+impl Bvh {
+    /// Builds the BVH over `corners` (one entry per triangle).
     pub fn build(corners: &[[Vec3; 3]]) -> Self {
         let triangles: Vec<Triangle> =
             corners.iter().map(|c| Triangle { v0: c[0].into(), v1: c[1].into(), v2: c[2].into() }).collect();
         let bvh = (!triangles.is_empty()).then(|| {
             build_cwbvh_from_tris(&triangles, BvhBuildParams::medium_build(), &mut Duration::default())
         });
-        Accel { bvh, triangles }
+        Bvh { bvh, triangles }
     }
 
     fn ray(origin: Vec3, direction: Vec3, t_max: f32) -> Ray {

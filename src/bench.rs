@@ -4,8 +4,7 @@
 use std::path::Path;
 use std::time::Instant;
 
-use crate::accel::Accel;
-use crate::frames::{load_scene, sppm_settings, ProgressStyle, RenderSettings};
+use crate::frames::{load_description, RenderSettings, Shot};
 use crate::sppm::{PassStats, Renderer};
 
 /// The process's peak resident memory in MiB (Linux `VmHWM`), if known.
@@ -18,34 +17,23 @@ fn peak_memory_mib() -> Option<f64> {
 
 /// Runs the benchmark and prints its figures.
 pub fn run(scene_path: &Path, resolution: [u32; 2], passes: u64) -> Result<(), String> {
-    let settings = RenderSettings {
-        scene: scene_path.to_path_buf(),
-        out_dir: "renders".into(),
-        passes: Some(passes),
-        time_budget_s: None,
-        photons: None,
-        alpha: 2.0 / 3.0,
-        radius: None,
-        resolution: Some(resolution),
-        seed: 1,
-        progress: ProgressStyle::None,
-        wavelength_nm: None,
-        spectral_bins: 0,
-    };
-    let scene = load_scene(&settings)?;
+    let mut settings = RenderSettings::new(scene_path, Path::new("renders"));
+    settings.resolution = Some(resolution);
+    let description = load_description(&settings)?;
     let start = Instant::now();
-    let accel = Accel::build(&scene.triangle_corners());
+    let shot = Shot::new(&settings, description)?;
+    let (scene, accel) = shot.pose(0.0);
     println!(
         "scene {} ({} triangles, {} lights), {}x{}, {} passes; BVH build {:.3} s",
         scene_path.display(),
-        scene.triangles.len(),
+        scene.triangle_count(),
         scene.lights.len(),
         resolution[0],
         resolution[1],
         passes,
         start.elapsed().as_secs_f64()
     );
-    let renderer = Renderer::new(&scene, &accel, sppm_settings(&settings, &scene));
+    let renderer = Renderer::new(&scene, &accel, shot.sppm().clone());
     for threads in [1, 2] {
         let pool = rayon::ThreadPoolBuilder::new().num_threads(threads).build().map_err(|e| e.to_string())?;
         let start = Instant::now();

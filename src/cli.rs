@@ -67,6 +67,22 @@ pub struct RenderArgs {
     /// Also write K spectral bands (channels Spectral.<centre>nm, W/(m^2 sr nm)), 1 to 94.
     #[arg(long, value_name = "K", value_parser = spectral_bins, default_value_t = 0)]
     spectral_bins: usize,
+    /// Frames to render: 7, 1-48, 1-48:2 (every second frame) or 1,5,9; files OUT/frame_####.exr.
+    #[arg(long, value_name = "SPEC", value_parser = parse_frames, default_value = "1")]
+    frames: FrameList,
+    /// Skip frames whose EXR already exists (EXRs are written whole and renamed, never half).
+    #[arg(long)]
+    resume: bool,
+    /// Motion-blur shutter length in frames, centred on each frame (0 turns motion blur off);
+    /// default: the scene's.
+    #[arg(long, value_name = "FRAMES", allow_negative_numbers = true, value_parser = non_negative_f32)]
+    shutter: Option<f32>,
+    /// Camera f-stop for depth of field (0 turns it off); default: the scene's camera.
+    #[arg(long, value_name = "F", allow_negative_numbers = true, value_parser = non_negative_f32)]
+    fstop: Option<f32>,
+    /// Distance to the plane in focus, scene units; default: the scene's camera, else 10.
+    #[arg(long, value_name = "D", allow_negative_numbers = true, value_parser = non_negative_f32)]
+    focus_distance: Option<f32>,
 }
 
 /// Flags of `caustic bench`.
@@ -119,6 +135,38 @@ fn positive_f64(s: &str) -> Result<f64, String> {
     }
 }
 
+fn non_negative_f32(s: &str) -> Result<f32, String> {
+    match s.parse::<f32>() {
+        Ok(v) if v >= 0.0 && v.is_finite() => Ok(v),
+        _ => Err(format!("expected a number >= 0, got '{s}'")),
+    }
+}
+
+/// The frames a `--frames` specification names, in order.
+#[derive(Clone, Debug)]
+pub struct FrameList(pub Vec<i32>);
+
+/// The most frames one render takes.
+const MAX_FRAMES: usize = 1_000_000;
+
+/// A frame specification: `7`, `1-48`, `1-48:2` or `1,5,9` (items may mix: `1-10,20`).
+pub fn parse_frames(spec: &str) -> Result<FrameList, String> {
+    let bad = || format!("expected frames like 7, 1-48, 1-48:2 or 1,5,9 (whole numbers >= 0), got '{spec}'");
+    let mut frames = Vec::new();
+    for item in spec.split(',') {
+        let (range, step) = item.split_once(':').map_or((item, "1"), |(r, s)| (r, s));
+        let step: usize = step.trim().parse().ok().filter(|&s| s >= 1).ok_or_else(bad)?;
+        let (first, last) = range.split_once('-').unwrap_or((range, range));
+        let first: i32 = first.trim().parse().ok().filter(|&f| f >= 0).ok_or_else(bad)?;
+        let last: i32 = last.trim().parse().ok().filter(|&l| l >= first).ok_or_else(bad)?;
+        if (last - first) as usize / step + frames.len() >= MAX_FRAMES {
+            return Err(format!("'{spec}' asks for more than {MAX_FRAMES} frames"));
+        }
+        frames.extend((first..=last).step_by(step));
+    }
+    Ok(FrameList(frames))
+}
+
 fn unit_interval(s: &str) -> Result<f64, String> {
     match s.parse::<f64>() {
         Ok(v) if v > 0.0 && v < 1.0 => Ok(v),
@@ -150,6 +198,11 @@ impl RenderArgs {
             progress: self.progress,
             wavelength_nm: self.wavelength,
             spectral_bins: self.spectral_bins,
+            frames: self.frames.0.clone(),
+            resume: self.resume,
+            shutter_frames: self.shutter,
+            fstop: self.fstop,
+            focus_distance: self.focus_distance,
         }
     }
 }
@@ -169,12 +222,17 @@ pub fn run(cli: Cli) -> Result<(), String> {
             let settings = args.settings();
             let report = thread_pool(args.threads)?.install(|| frames::render(&settings))?;
             if settings.progress != ProgressStyle::Json {
-                eprintln!(
-                    "caustic: wrote {} ({} passes, {:.1} s)",
-                    report.path.display(),
-                    report.passes,
-                    report.elapsed_s
-                );
+                for frame in &report.frames {
+                    eprintln!(
+                        "caustic: wrote {} ({} passes, {:.1} s)",
+                        frame.path.display(),
+                        frame.passes,
+                        frame.elapsed_s
+                    );
+                }
+                if !report.skipped.is_empty() {
+                    eprintln!("caustic: skipped {} frames already rendered (--resume)", report.skipped.len());
+                }
             }
             Ok(())
         }

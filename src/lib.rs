@@ -24,6 +24,7 @@ pub mod frames;
 pub mod geometry;
 pub mod lights;
 pub mod materials;
+pub mod progress;
 pub mod sampling;
 pub mod scene;
 pub mod spectrum;

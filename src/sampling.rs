@@ -52,6 +52,14 @@ pub fn pass_sample(seed: u64, pass: u64) -> f32 {
     (offset + pass as f64 * INVERSE_GOLDEN_RATIO).fract() as f32
 }
 
+/// The pass's point in the shutter, in [0, 1): a second low-discrepancy sequence (Roberts' R2
+/// constant), so that times are stratified over passes too and depend on (seed, pass) only.
+pub fn pass_time_sample(seed: u64, pass: u64) -> f32 {
+    const ALPHA: f64 = 0.569_840_290_998_053_3;
+    let offset = (mix(seed ^ 0x7469_6d65) >> 11) as f64 / (1u64 << 53) as f64;
+    (offset + pass as f64 * ALPHA).fract() as f32
+}
+
 /// Concentric map of the square to the unit disc (Shirley & Chiu 1997).
 pub fn square_to_disc(u: Vec2) -> Vec2 {
     let p = 2.0 * u - Vec2::ONE;

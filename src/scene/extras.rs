@@ -4,9 +4,10 @@
 //! inside it are errors (a typo must not be silently ignored). The schema is documented for users
 //! in `docs/extras.md`; keep the two in step.
 //!
-//! - scene: `{"caustic": {"resolution": [w, h], "world": World}}`
+//! - scene: `{"caustic": {"resolution": [w, h], "world": World, "fps": 24, "shutter": Shutter}}`
 //! - node: `{"caustic": {"area_light": AreaLight}}` on an area light's (empty) node, and
-//!   `{"caustic": {"sun_angle_deg": a}}` on a sun's node;
+//!   `{"caustic": {"sun_angle_deg": a}}` on a sun's node, `{"caustic": {"lens": Lens}}` on the
+//!   camera's node;
 //! - material: `{"caustic": {"glass": "BK7"}}`, or `"abbe"`, `"sellmeier"`, `"ior_table"`.
 
 use serde::Deserialize;
@@ -21,6 +22,52 @@ pub struct SceneExtras {
     pub world: Option<WorldExtras>,
     /// A regression scene's analytic question (read by its tests; the renderer ignores it).
     pub regression: Option<serde_json::Value>,
+    /// Frames per second: glTF time = frame / fps (default 24).
+    pub fps: Option<f32>,
+    /// The motion-blur shutter (absent: no motion blur).
+    pub shutter: Option<ShutterExtras>,
+}
+
+/// Blender's motion-blur shutter.
+#[derive(Debug, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct ShutterExtras {
+    /// Shutter length in frames (Blender's Shutter).
+    pub length_frames: f32,
+    /// Where the shutter opens relative to the frame (Blender's Position; default CENTER).
+    #[serde(default)]
+    pub position: ShutterPosition,
+}
+
+/// Blender's shutter positions.
+#[derive(Clone, Copy, Debug, Default, Deserialize, PartialEq, Eq)]
+#[serde(rename_all = "UPPERCASE")]
+pub enum ShutterPosition {
+    /// Opens at the frame.
+    Start,
+    /// Centred on the frame.
+    #[default]
+    Center,
+    /// Closes at the frame.
+    End,
+}
+
+/// A camera's depth of field, on the camera's node.
+#[derive(Debug, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct LensExtras {
+    /// f-number (Blender's F-Stop); 0 turns depth of field off.
+    pub fstop: f32,
+    /// Focus distance in scene units (Blender's Focus Distance, or the distance to its focus object).
+    pub focus_distance: f32,
+    /// Focal length in mm (Blender's Focal Length); default from the field of view and a 36 mm sensor.
+    pub focal_length_mm: Option<f32>,
+    /// Aperture blades (0: round).
+    #[serde(default)]
+    pub blades: u32,
+    /// Blade rotation in degrees.
+    #[serde(default)]
+    pub blade_rotation_deg: f32,
 }
 
 /// The world: a uniform colour, or an equirectangular image, times a strength.
@@ -48,6 +95,8 @@ pub struct NodeExtras {
     pub area_light: Option<AreaLightExtras>,
     /// The angular diameter of the node's sun light, in degrees (soft shadows).
     pub sun_angle_deg: Option<f32>,
+    /// The node's camera's depth of field.
+    pub lens: Option<LensExtras>,
 }
 
 /// The `caustic` entry of a material's extras: how its index depends on wavelength (the first

@@ -1,4 +1,6 @@
-//! glTF 2.0 as Blender 5.0's exporter writes it, plus the `caustic` extras, into a [`Scene`].
+//! glTF 2.0 as Blender 5.0's exporter writes it, plus the `caustic` extras, into a
+//! [`Description`]: meshes in their nodes' local space and the node rig with its animation
+//! (translation, rotation, scale; `KHR_animation_pointer` cannot be read by the gltf crate).
 //!
 //! Reads the default scene's node tree (nested transforms), triangle meshes with normals and
 //! texture coordinates, metallic-roughness materials with `KHR_materials_transmission`,
@@ -7,33 +9,42 @@
 //! extras schema in [`super::extras`].
 
 use std::path::Path;
-use std::sync::Arc;
 
-use glam::{Mat3, Mat4, Vec2, Vec3};
+use glam::{Quat, Vec2, Vec3, Vec4};
+use gltf::animation::util::ReadOutputs;
+use gltf::animation::Property;
 use gltf::khr_lights_punctual::Kind;
 
-use super::extras::{self, AreaLightExtras, MaterialExtras, NodeExtras, SceneExtras};
-use super::{shapes, Scene, SceneError, TriangleRef, NOT_A_LIGHT};
-use crate::camera::Camera;
+use super::animation::{Interpolation, NodeMotion, Rig, Track};
+use super::description::{
+    CameraInstance, Description, LensSettings, MeshInstance, PunctualKind, PunctualLight, Shutter,
+};
+use super::extras::{
+    self, AreaLightExtras, LensExtras, NodeExtras, SceneExtras, ShutterExtras, ShutterPosition,
+};
+use super::gltf_materials::material;
+use super::{shapes, SceneError, TriangleRef};
 use crate::geometry::Cone;
-use crate::lights::{Light, World};
-use crate::materials::{BaseColour, Material, Texture};
-use crate::spectrum::{Dispersion, RgbSpectrum};
+use crate::lights::World;
+use crate::materials::{BaseColour, Material};
+use crate::spectrum::RgbSpectrum;
 
 /// glTF photometric units to watts: Blender writes W * 683 / (4 pi) candela and W/m^2 * 683 lux.
 const LUMENS_PER_WATT: f32 = 683.0;
 
-/// What the node walk gathers before the scene is assembled.
+/// What the node walk gathers before the description is assembled.
 struct Builder<'a> {
     buffers: &'a [gltf::buffer::Data],
-    scene: Scene,
-    camera: Option<Camera>,
-    suns: Vec<usize>,
+    materials: Vec<Material>,
+    meshes: Vec<MeshInstance>,
+    lights: Vec<PunctualLight>,
+    camera: Option<CameraInstance>,
+    warnings: Vec<String>,
     material_offset: u32,
 }
 
-/// Loads `path` into a [`Scene`].
-pub fn load(path: &Path) -> Result<Scene, SceneError> {
+/// Loads `path` into a [`Description`].
+pub fn load(path: &Path) -> Result<Description, SceneError> {
     let fail = |message: String| SceneError { path: path.to_path_buf(), message };
     if !path.exists() {
         return Err(fail("no such file".into()));
@@ -49,18 +60,126 @@ pub fn load(path: &Path) -> Result<Scene, SceneError> {
         document.materials().map(|m| material(&m, &images)).collect::<Result<_, _>>().map_err(fail)?;
     let material_offset = materials.len() as u32;
     materials.push(Material::default_grey());
+    let rig = rig(&document, &buffers).map_err(fail)?;
     let mut builder = Builder {
         buffers: &buffers,
-        scene: empty_scene(materials, scene_extras.resolution),
+        materials,
+        meshes: Vec::new(),
+        lights: Vec::new(),
         camera: None,
-        suns: Vec::new(),
+        warnings: Vec::new(),
         material_offset,
     };
     for node in gltf_scene.nodes() {
-        builder.visit(&node, Mat4::IDENTITY).map_err(fail)?;
+        builder.visit(&node, &rig).map_err(fail)?;
     }
-    let world = scene_extras.world.map(|w| world(&w, path)).transpose().map_err(fail)?;
-    builder.finish(world).map_err(fail)
+    let world = scene_extras.world.as_ref().map(|w| world(w, path)).transpose().map_err(fail)?;
+    let camera =
+        builder.camera.ok_or_else(|| fail("the scene has no camera: add a perspective camera".into()))?;
+    let fps = scene_extras.fps.unwrap_or(24.0);
+    if !(fps > 0.0 && fps.is_finite()) {
+        return Err(fail(format!("scene extras `caustic.fps`: expected a positive frame rate, got {fps}")));
+    }
+    let shutter = shutter(scene_extras.shutter.as_ref()).map_err(fail)?;
+    let mut description = Description {
+        rig,
+        meshes: builder.meshes,
+        lights: builder.lights,
+        camera,
+        materials: builder.materials,
+        world,
+        resolution: scene_extras.resolution,
+        fps,
+        shutter,
+        warnings: builder.warnings,
+    };
+    if description
+        .meshes
+        .iter()
+        .all(|m| m.triangles.iter().all(|t| description.materials[t.material as usize].emission.is_none()))
+        && description.lights.is_empty()
+        && description.world.is_none()
+    {
+        description.warnings.push("the scene has no light: the image will be black".into());
+    }
+    Ok(description)
+}
+
+/// Every node's parent, rest transform and animation tracks.
+fn rig(document: &gltf::Document, buffers: &[gltf::buffer::Data]) -> Result<Rig, String> {
+    let mut nodes: Vec<NodeMotion> = document
+        .nodes()
+        .map(|n| {
+            let (t, r, s) = n.transform().decomposed();
+            NodeMotion {
+                rest: (Vec3::from(t), Quat::from_array(r).normalize(), Vec3::from(s)),
+                ..Default::default()
+            }
+        })
+        .collect();
+    for node in document.nodes() {
+        for child in node.children() {
+            nodes[child.index()].parent = Some(node.index());
+        }
+    }
+    for animation in document.animations() {
+        for channel in animation.channels() {
+            let target = channel.target();
+            let name = target.node().name().unwrap_or("unnamed").to_string();
+            let reader = channel.reader(|b| buffers.get(b.index()).map(|d| &d.0[..]));
+            let times: Vec<f32> =
+                reader.read_inputs().ok_or(format!("animation of node '{name}': no key times"))?.collect();
+            let interpolation = match channel.sampler().interpolation() {
+                gltf::animation::Interpolation::Step => Interpolation::Step,
+                gltf::animation::Interpolation::Linear => Interpolation::Linear,
+                gltf::animation::Interpolation::CubicSpline => Interpolation::CubicSpline,
+            };
+            let (values, is_rotation): (Vec<Vec4>, bool) = match reader.read_outputs() {
+                Some(ReadOutputs::Translations(v)) | Some(ReadOutputs::Scales(v)) => {
+                    (v.map(|v| Vec3::from(v).extend(0.0)).collect(), false)
+                }
+                Some(ReadOutputs::Rotations(r)) => (r.into_f32().map(Vec4::from).collect(), true),
+                Some(ReadOutputs::MorphTargetWeights(_)) => continue,
+                None => return Err(format!("animation of node '{name}': no key values")),
+            };
+            let per_key = if interpolation == Interpolation::CubicSpline { 3 } else { 1 };
+            let sorted = times.windows(2).all(|w| w[0] < w[1]);
+            if times.is_empty() || values.len() != per_key * times.len() || !sorted {
+                return Err(format!(
+                    "animation of node '{name}': {} key times (increasing) need {} values, found {}",
+                    times.len(),
+                    per_key * times.len(),
+                    values.len()
+                ));
+            }
+            let track = Some(Track { times, values, interpolation, is_rotation });
+            let motion = &mut nodes[target.node().index()];
+            match target.property() {
+                Property::Translation => motion.translation = track,
+                Property::Rotation => motion.rotation = track,
+                Property::Scale => motion.scale = track,
+                Property::MorphTargetWeights => {}
+            }
+        }
+    }
+    Ok(Rig { nodes })
+}
+
+/// The shutter in frames relative to the frame, from Blender's length and position.
+fn shutter(extras: Option<&ShutterExtras>) -> Result<Shutter, String> {
+    let Some(s) = extras else { return Ok(Shutter::CLOSED) };
+    if !(s.length_frames >= 0.0 && s.length_frames.is_finite()) {
+        return Err(format!(
+            "scene extras `caustic.shutter.length_frames`: expected a length >= 0, got {}",
+            s.length_frames
+        ));
+    }
+    let open = match s.position {
+        ShutterPosition::Start => 0.0,
+        ShutterPosition::Center => -s.length_frames / 2.0,
+        ShutterPosition::End => -s.length_frames,
+    };
+    Ok(Shutter { open, length: s.length_frames })
 }
 
 /// A message for the gltf crate's errors that says what the user must fix.
@@ -77,107 +196,6 @@ fn describe_import_error(error: gltf::Error) -> String {
         }
         other => format!("cannot load glTF: {other}"),
     }
-}
-
-fn empty_scene(materials: Vec<Material>, resolution: Option<[u32; 2]>) -> Scene {
-    Scene {
-        positions: Vec::new(),
-        normals: Vec::new(),
-        uvs: Vec::new(),
-        triangles: Vec::new(),
-        materials,
-        lights: Vec::new(),
-        triangle_lights: Vec::new(),
-        distant_lights: Vec::new(),
-        camera: Camera::from_node(Mat4::IDENTITY, 1.0),
-        resolution,
-        aspect_ratio: None,
-        warnings: Vec::new(),
-    }
-}
-
-/// A glTF material as a Caustic material.
-fn material(m: &gltf::Material, images: &[gltf::image::Data]) -> Result<Material, String> {
-    let name = m.name().unwrap_or("unnamed").to_string();
-    let pbr = m.pbr_metallic_roughness();
-    let factor = Vec3::from_slice(&pbr.base_color_factor()[..3]);
-    let base_colour = match pbr.base_color_texture() {
-        Some(info) => {
-            let image = &images[info.texture().source().index()];
-            BaseColour::Texture(Arc::new(
-                texture(image, factor).map_err(|e| format!("material '{name}': {e}"))?,
-            ))
-        }
-        None => BaseColour::Constant(RgbSpectrum::reflectance(factor)),
-    };
-    let emission = Vec3::from(m.emissive_factor()) * m.emissive_strength().unwrap_or(1.0);
-    Ok(Material {
-        name,
-        base_colour,
-        metallic: pbr.metallic_factor().clamp(0.0, 1.0),
-        roughness: pbr.roughness_factor().clamp(0.0, 1.0),
-        transmission: m.transmission().map_or(0.0, |t| t.transmission_factor()).clamp(0.0, 1.0),
-        ior: dispersion_law(m).map_err(|e| format!("material '{}': {e}", m.name().unwrap_or("unnamed")))?,
-        emission: (emission.max_element() > 0.0).then(|| RgbSpectrum::illuminant(emission)),
-        emits_both_sides: true,
-    })
-}
-
-/// The material's index against wavelength: the `caustic` extras first, then
-/// `KHR_materials_dispersion` (read raw: the gltf crate does not type it), then a constant.
-fn dispersion_law(m: &gltf::Material) -> Result<Dispersion, String> {
-    let n_d = m.ior().unwrap_or(1.5);
-    let extras: MaterialExtras = extras::parse(m.extras()).map_err(|e| format!("extras `caustic`: {e}"))?;
-    if let Some(name) = &extras.glass {
-        return Dispersion::glass(name).ok_or_else(|| {
-            format!(
-                "extras `caustic.glass`: unknown glass '{name}' (the catalogue has {})",
-                Dispersion::glass_names().join(", ")
-            )
-        });
-    }
-    if let Some(s) = &extras.sellmeier {
-        if s.b.len() != s.c.len() || s.b.is_empty() || s.b.len() > 4 {
-            return Err(
-                "extras `caustic.sellmeier`: `b` and `c` need the same number of terms, 1 to 4".into()
-            );
-        }
-        let (mut b, mut c) = ([0.0; 4], [0.0; 4]);
-        b[..s.b.len()].copy_from_slice(&s.b);
-        c[..s.c.len()].copy_from_slice(&s.c);
-        return Ok(Dispersion::Sellmeier { b, c });
-    }
-    if let Some(table) = &extras.ior_table {
-        return Dispersion::table(table.iter().map(|&[l, n]| (l, n)).collect())
-            .map_err(|e| format!("extras `caustic.ior_table`: {e}"));
-    }
-    let khr = m.extension_value("KHR_materials_dispersion").and_then(|v| v["dispersion"].as_f64());
-    let v_d = match (extras.abbe, khr) {
-        (Some(v_d), _) if v_d > 0.0 => Some(v_d),
-        (Some(v_d), _) => {
-            return Err(format!("extras `caustic.abbe`: expected a positive Abbe number, got {v_d}"))
-        }
-        (None, Some(dispersion)) if dispersion > 0.0 => Some((20.0 / dispersion) as f32),
-        _ => None,
-    };
-    Ok(match v_d {
-        Some(v_d) => Dispersion::Abbe { n_d, v_d },
-        None => Dispersion::Constant(n_d),
-    })
-}
-
-fn texture(image: &gltf::image::Data, factor: Vec3) -> Result<Texture, String> {
-    use gltf::image::Format;
-    let channels = match image.format {
-        Format::R8G8B8 => 3,
-        Format::R8G8B8A8 => 4,
-        other => {
-            return Err(format!(
-                "base colour texture format {other:?} is not supported (use 8-bit RGB or RGBA)"
-            ))
-        }
-    };
-    Ok(Texture::from_srgb8(image.width as usize, image.height as usize, channels, &image.pixels, factor))
 }
 
 /// The world from the scene extras; an image path is relative to the glTF file's folder.
@@ -198,116 +216,140 @@ fn sun_disc(extras: &NodeExtras) -> Cone {
 }
 
 impl Builder<'_> {
-    /// Adds a node and its children, with `parent` the parent's world matrix.
-    fn visit(&mut self, node: &gltf::Node, parent: Mat4) -> Result<(), String> {
-        let world = parent * Mat4::from_cols_array_2d(&node.transform().matrix());
+    /// Adds a node and its children.
+    fn visit(&mut self, node: &gltf::Node, rig: &Rig) -> Result<(), String> {
         let name = node.name().unwrap_or("unnamed");
         let extras: NodeExtras =
             extras::parse(node.extras()).map_err(|e| format!("node '{name}' extras `caustic`: {e}"))?;
         if let Some(mesh) = node.mesh() {
-            self.add_mesh(&mesh, world)?;
+            self.add_mesh(&mesh, node.index())?;
         }
         if let Some(camera) = node.camera() {
-            self.add_camera(&camera, world, name)?;
+            self.add_camera(&camera, node.index(), name, extras.lens.as_ref())?;
         }
         if let Some(light) = node.light() {
-            self.add_punctual_light(&light, world, &extras);
+            self.add_punctual_light(&light, node.index(), &extras);
         }
         if let Some(area) = &extras.area_light {
-            self.add_area_light(area, world, name)?;
+            self.add_area_light(area, node.index(), name, rig)?;
         }
         for child in node.children() {
-            self.visit(&child, world)?;
+            self.visit(&child, rig)?;
         }
         Ok(())
     }
 
-    fn add_camera(&mut self, camera: &gltf::Camera, world: Mat4, name: &str) -> Result<(), String> {
+    fn add_camera(
+        &mut self,
+        camera: &gltf::Camera,
+        node: usize,
+        name: &str,
+        lens: Option<&LensExtras>,
+    ) -> Result<(), String> {
         if self.camera.is_some() {
-            self.scene.warnings.push(format!("camera node '{name}' ignored: the first camera is used"));
+            self.warnings.push(format!("camera node '{name}' ignored: the first camera is used"));
             return Ok(());
         }
-        match camera.projection() {
-            gltf::camera::Projection::Perspective(p) => {
-                self.camera = Some(Camera::from_node(world, p.yfov()));
-                self.scene.aspect_ratio = p.aspect_ratio();
-                Ok(())
-            }
-            gltf::camera::Projection::Orthographic(_) => Err(format!(
+        let gltf::camera::Projection::Perspective(p) = camera.projection() else {
+            return Err(format!(
                 "camera node '{name}': orthographic cameras are not supported; use a perspective camera"
-            )),
+            ));
+        };
+        if let Some(lens) = lens {
+            if !(lens.fstop >= 0.0 && lens.focus_distance >= 0.0 && lens.fstop.is_finite()) {
+                return Err(format!(
+                    "camera node '{name}' extras `caustic.lens`: f-stop and focus distance must be >= 0"
+                ));
+            }
         }
+        // Blender's sensor fit: a 36 mm sensor across the wider side of the image.
+        let aspect = p.aspect_ratio().unwrap_or(1.0).max(1e-6);
+        let tan_half_wide = (p.yfov() / 2.0).tan() * aspect.max(1.0);
+        let focal_length_mm = lens.and_then(|l| l.focal_length_mm).unwrap_or(18.0 / tan_half_wide);
+        self.camera = Some(CameraInstance {
+            node,
+            yfov: p.yfov(),
+            aspect_ratio: p.aspect_ratio(),
+            focal_length_mm,
+            lens: lens.map(|l| LensSettings {
+                fstop: l.fstop,
+                focus_distance: l.focus_distance,
+                blades: l.blades,
+                blade_rotation_deg: l.blade_rotation_deg,
+            }),
+        });
+        Ok(())
     }
 
     fn add_punctual_light(
         &mut self,
         light: &gltf::khr_lights_punctual::Light,
-        world: Mat4,
+        node: usize,
         extras: &NodeExtras,
     ) {
         let colour = Vec3::from(light.color()) * light.intensity() / LUMENS_PER_WATT;
         let spectrum = RgbSpectrum::illuminant(colour);
-        let position = world.transform_point3(Vec3::ZERO);
-        let axis = world.transform_vector3(-Vec3::Z).normalize();
-        let light = match light.kind() {
-            Kind::Point => Light::Point { position, intensity: spectrum },
-            Kind::Spot { inner_cone_angle, outer_cone_angle } => Light::Spot {
-                position,
-                axis,
-                intensity: spectrum,
-                inner: Cone::from_half_angle(inner_cone_angle),
-                outer: Cone::from_half_angle(outer_cone_angle),
-            },
-            Kind::Directional => {
-                self.suns.push(self.scene.lights.len());
-                Light::Sun {
-                    direction: axis,
-                    irradiance: spectrum,
-                    disc: sun_disc(extras),
-                    sphere: Default::default(),
-                }
-            }
+        let kind = match light.kind() {
+            Kind::Point => PunctualKind::Point(spectrum),
+            Kind::Spot { inner_cone_angle, outer_cone_angle } => PunctualKind::Spot(
+                spectrum,
+                Cone::from_half_angle(inner_cone_angle),
+                Cone::from_half_angle(outer_cone_angle),
+            ),
+            Kind::Directional => PunctualKind::Sun(spectrum, sun_disc(extras)),
         };
-        self.scene.lights.push(light);
+        self.lights.push(PunctualLight { node, kind });
     }
 
-    /// An area light becomes one-sided emitting triangles with radiance P / (pi A).
-    fn add_area_light(&mut self, area: &AreaLightExtras, world: Mat4, name: &str) -> Result<(), String> {
+    /// An area light becomes one-sided emitting triangles with radiance P / (pi A), A its area
+    /// at the scene's rest pose.
+    fn add_area_light(
+        &mut self,
+        area: &AreaLightExtras,
+        node: usize,
+        name: &str,
+        rig: &Rig,
+    ) -> Result<(), String> {
         if !(area.size > 0.0 && area.power >= 0.0 && area.size.is_finite() && area.power.is_finite()) {
             return Err(format!("node '{name}' area light: size must be positive and power non-negative"));
         }
-        let triangles: Vec<[Vec3; 3]> = shapes::area_light_triangles(area)
-            .into_iter()
+        let local = shapes::area_light_triangles(area);
+        let world = rig.world(node, 0.0);
+        let area_m2: f32 = local
+            .iter()
             .map(|t| t.map(|v| world.transform_point3(v)))
-            .collect();
-        let total_area: f32 = triangles.iter().map(|[a, b, c]| (*b - *a).cross(*c - *a).length() / 2.0).sum();
-        let radiance = Vec3::from(area.color) * area.power / (std::f32::consts::PI * total_area);
-        let material = self.scene.materials.len() as u32;
-        self.scene.materials.push(Material {
+            .map(|[a, b, c]| (b - a).cross(c - a).length() / 2.0)
+            .sum();
+        let radiance =
+            Vec3::from(area.color) * area.power / (std::f32::consts::PI * area_m2.max(f32::MIN_POSITIVE));
+        let material = self.materials.len() as u32;
+        self.materials.push(Material {
             name: format!("area light '{name}'"),
             base_colour: BaseColour::Constant(RgbSpectrum::constant(0.0)),
             emission: Some(RgbSpectrum::illuminant(radiance)),
             emits_both_sides: false,
             ..Material::default_grey()
         });
-        for corners in triangles {
-            let normal = (corners[1] - corners[0]).cross(corners[2] - corners[0]).normalize();
-            let base = self.scene.positions.len() as u32;
-            self.scene.positions.extend(corners);
-            self.scene.normals.extend([normal; 3]);
-            self.scene.uvs.extend([Vec2::ZERO; 3]);
-            self.scene.triangles.push(TriangleRef { vertices: [base, base + 1, base + 2], material });
-        }
+        let positions: Vec<Vec3> = local.iter().flatten().copied().collect();
+        let triangles = (0..local.len() as u32)
+            .map(|k| TriangleRef { vertices: [3 * k, 3 * k + 1, 3 * k + 2], material })
+            .collect();
+        self.meshes.push(MeshInstance {
+            node,
+            name: format!("area light '{name}'"),
+            normals: vec![-Vec3::Z; positions.len()],
+            uvs: vec![Vec2::ZERO; positions.len()],
+            positions,
+            triangles,
+        });
         Ok(())
     }
 
-    fn add_mesh(&mut self, mesh: &gltf::Mesh, world: Mat4) -> Result<(), String> {
+    fn add_mesh(&mut self, mesh: &gltf::Mesh, node: usize) -> Result<(), String> {
         let name = mesh.name().unwrap_or("unnamed");
-        let normal_matrix = Mat3::from_mat4(world).inverse().transpose();
-        let mirrored = Mat3::from_mat4(world).determinant() < 0.0;
         for primitive in mesh.primitives() {
             if primitive.mode() != gltf::mesh::Mode::Triangles {
-                self.scene.warnings.push(format!(
+                self.warnings.push(format!(
                     "mesh '{name}': a primitive of mode {:?} skipped (only triangles render)",
                     primitive.mode()
                 ));
@@ -317,78 +359,50 @@ impl Builder<'_> {
             let positions: Vec<Vec3> = reader
                 .read_positions()
                 .ok_or_else(|| format!("mesh '{name}': a primitive has no POSITION attribute"))?
-                .map(|p| world.transform_point3(Vec3::from(p)))
+                .map(Vec3::from)
                 .collect();
-            let normals: Option<Vec<Vec3>> = reader
+            let count = positions.len();
+            let normals: Vec<Vec3> = reader
                 .read_normals()
-                .map(|n| n.map(|n| (normal_matrix * Vec3::from(n)).normalize_or_zero()).collect());
-            let uvs: Option<Vec<Vec2>> =
-                reader.read_tex_coords(0).map(|t| t.into_f32().map(Vec2::from).collect());
+                .map(|n| n.map(|n| Vec3::from(n).normalize_or_zero()).collect())
+                .unwrap_or_else(|| vec![Vec3::ZERO; count]);
+            let uvs: Vec<Vec2> = reader
+                .read_tex_coords(0)
+                .map(|t| t.into_f32().map(Vec2::from).collect())
+                .unwrap_or_else(|| vec![Vec2::ZERO; count]);
             let indices: Vec<u32> = match reader.read_indices() {
                 Some(indices) => indices.into_u32().collect(),
-                None => (0..positions.len() as u32).collect(),
+                None => (0..count as u32).collect(),
             };
             let material = primitive.material().index().map_or(self.material_offset, |i| i as u32);
-            let base = self.scene.positions.len() as u32;
-            let vertex_count = positions.len();
-            self.scene.normals.extend(normals.unwrap_or_else(|| vec![Vec3::ZERO; vertex_count]));
-            self.scene.uvs.extend(uvs.unwrap_or_else(|| vec![Vec2::ZERO; vertex_count]));
+            let mut triangles = Vec::with_capacity(indices.len() / 3);
             let mut skipped = 0;
             for chunk in indices.chunks_exact(3) {
-                if chunk.iter().any(|&i| i as usize >= vertex_count) {
-                    return Err(format!(
-                        "mesh '{name}': index {} out of range ({vertex_count} vertices)",
-                        chunk.iter().max().unwrap_or(&0)
-                    ));
+                let vertices = [chunk[0], chunk[1], chunk[2]];
+                if let Some(&bad) = vertices.iter().find(|&&i| i as usize >= count) {
+                    return Err(format!("mesh '{name}': index {bad} out of range ({count} vertices)"));
                 }
-                let corners = [chunk[0], chunk[1], chunk[2]].map(|i| positions[i as usize]);
-                if !is_valid_triangle(&corners) {
+                if is_valid_triangle(&vertices.map(|i| positions[i as usize])) {
+                    triangles.push(TriangleRef { vertices, material });
+                } else {
                     skipped += 1;
-                    continue;
                 }
-                let [a, b, c] = [chunk[0], chunk[1], chunk[2]].map(|i| base + i);
-                let vertices = if mirrored { [a, c, b] } else { [a, b, c] };
-                self.scene.triangles.push(TriangleRef { vertices, material });
             }
-            self.scene.positions.extend(positions);
             if skipped > 0 {
-                self.scene.warnings.push(format!("mesh '{name}': skipped {skipped} degenerate triangles (zero area or non-finite coordinates)"));
+                self.warnings.push(format!(
+                    "mesh '{name}': skipped {skipped} degenerate triangles (zero area or non-finite coordinates)"
+                ));
             }
+            self.meshes.push(MeshInstance {
+                node,
+                name: name.to_string(),
+                positions,
+                normals,
+                uvs,
+                triangles,
+            });
         }
         Ok(())
-    }
-
-    /// Emitting triangles become lights, distant lights learn the scene's bounds.
-    fn finish(mut self, world: Option<World>) -> Result<Scene, String> {
-        let scene = &mut self.scene;
-        scene.camera = self.camera.ok_or("the scene has no camera: add a perspective camera")?;
-        let sphere = scene.bounding_sphere();
-        for &i in &self.suns {
-            if let Light::Sun { sphere: s, disc, .. } = &mut scene.lights[i] {
-                *s = sphere;
-                if !disc.is_delta() {
-                    scene.distant_lights.push(i);
-                }
-            }
-        }
-        scene.triangle_lights = vec![NOT_A_LIGHT; scene.triangles.len()];
-        for (i, (t, corners)) in scene.triangles.iter().zip(scene.triangle_corners()).enumerate() {
-            let material = &scene.materials[t.material as usize];
-            if let Some(radiance) = material.emission {
-                let both_sides = material.emits_both_sides;
-                scene.triangle_lights[i] = scene.lights.len() as u32;
-                scene.lights.push(Light::Triangle { corners, radiance, both_sides });
-            }
-        }
-        if let Some(mut world) = world {
-            world.sphere = sphere;
-            scene.distant_lights.push(scene.lights.len());
-            scene.lights.push(Light::World(world));
-        }
-        if scene.lights.iter().all(|l| l.power() <= 0.0) {
-            scene.warnings.push("the scene has no light: the image will be black".into());
-        }
-        Ok(self.scene)
     }
 }
 

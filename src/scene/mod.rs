@@ -1,20 +1,30 @@
-//! The render-ready scene: world-space triangles, materials, lights and the camera.
+//! The render-ready scene at one time: world-space triangles, materials, lights and the camera.
 //!
 //! Takes a glTF 2.0 file (`.gltf` with its `.bin`, or `.glb`) plus the `caustic` extras
-//! ([`extras`]); gives a [`Scene`] that the accelerator and the SPPM passes read and never change.
-//! Every triangle is flattened to world space at load; emitting triangles are also lights.
+//! ([`extras`]); [`gltf_loader`] reads it into a time-independent [`Description`]; [`pose`]
+//! splits it, for a range of times, into a fixed part (flattened and indexed once) and the moving
+//! instances, and poses a [`Scene`] at any time in the range. The accelerator and the SPPM passes
+//! read a `Scene` and never change it. Emitting triangles are also lights.
 
+pub mod animation;
+pub mod description;
 pub mod extras;
 mod gltf_loader;
+mod gltf_materials;
+pub mod pose;
 mod shapes;
 
 use std::path::{Path, PathBuf};
+use std::sync::Arc;
 
 use glam::{Vec2, Vec3};
 
 use crate::camera::Camera;
 use crate::lights::{BoundingSphere, Light};
 use crate::materials::{Material, ShadingFrame};
+
+pub use description::Description;
+pub use pose::{Prepared, TimeRange};
 
 /// A scene that cannot be loaded: the file and what is wrong with it.
 #[derive(Debug, thiserror::Error)]
@@ -31,37 +41,75 @@ pub struct SceneError {
 pub struct TriangleRef {
     /// Vertex indices, counter-clockwise seen from the outside.
     pub vertices: [u32; 3],
-    /// Index into `Scene::materials`.
+    /// Index into the scene's materials.
     pub material: u32,
 }
 
-/// The render-ready scene.
-#[derive(Debug)]
-pub struct Scene {
-    /// World-space vertex positions.
+/// World-space triangles with their vertex attributes.
+#[derive(Clone, Debug, Default)]
+pub struct Geometry {
+    /// Vertex positions.
     pub positions: Vec<Vec3>,
-    /// World-space unit shading normals, one per vertex.
+    /// Unit shading normals (zero where the file has none).
     pub normals: Vec<Vec3>,
-    /// Texture coordinates, one per vertex (zero where the mesh has none).
+    /// Texture coordinates.
     pub uvs: Vec<Vec2>,
     /// The triangles.
     pub triangles: Vec<TriangleRef>,
+}
+
+impl Geometry {
+    /// The corners of every triangle, in order.
+    pub fn corners(&self) -> Vec<[Vec3; 3]> {
+        self.triangles.iter().map(|t| t.vertices.map(|v| self.positions[v as usize])).collect()
+    }
+
+    /// The surface at barycentric coordinates `b` (weights of corners 1 and 2) of triangle `i`.
+    fn surface(&self, i: usize, b: Vec2) -> Surface {
+        let t = self.triangles[i];
+        let [i0, i1, i2] = t.vertices.map(|v| v as usize);
+        let w = [1.0 - b.x - b.y, b.x, b.y];
+        let interpolate = |a: &[Vec3]| a[i0] * w[0] + a[i1] * w[1] + a[i2] * w[2];
+        let p = interpolate(&self.positions);
+        let ng = (self.positions[i1] - self.positions[i0])
+            .cross(self.positions[i2] - self.positions[i0])
+            .normalize_or_zero();
+        let n = interpolate(&self.normals).normalize_or_zero();
+        let n = if n == Vec3::ZERO { ng } else { n };
+        let uv = self.uvs[i0] * w[0] + self.uvs[i1] * w[1] + self.uvs[i2] * w[2];
+        Surface { p, frame: ShadingFrame { n, ng }, uv, material: t.material }
+    }
+
+    /// The smallest and largest corner, or `None` when empty.
+    pub fn bounds(&self) -> Option<(Vec3, Vec3)> {
+        let first = *self.positions.first()?;
+        Some(self.positions.iter().fold((first, first), |(lo, hi), &p| (lo.min(p), hi.max(p))))
+    }
+}
+
+/// The scene at one time. Triangles are numbered fixed first, then moving.
+#[derive(Clone, Debug)]
+pub struct Scene {
+    /// Triangles that do not move over the prepared time range (shared between poses).
+    pub fixed: Arc<Geometry>,
+    /// Triangles that move, posed at this time.
+    pub moving: Geometry,
     /// Materials, indexed by `TriangleRef::material`.
-    pub materials: Vec<Material>,
+    pub materials: Arc<Vec<Material>>,
     /// Every light, emitting triangles included.
     pub lights: Vec<Light>,
-    /// For each triangle, the index in `lights` of its emitter, or [`NOT_A_LIGHT`].
-    pub triangle_lights: Vec<u32>,
+    /// For each fixed triangle, the index in `lights` of its emitter, or [`NOT_A_LIGHT`].
+    pub fixed_triangle_lights: Arc<Vec<u32>>,
+    /// The same for each moving triangle.
+    pub moving_triangle_lights: Vec<u32>,
     /// Indices in `lights` of the distant lights a ray leaving the scene can see.
     pub distant_lights: Vec<usize>,
-    /// The camera.
+    /// The camera at this time.
     pub camera: Camera,
     /// The resolution the scene asks for, if it does.
     pub resolution: Option<[u32; 2]>,
     /// The camera's aspect ratio (width / height), if the file gives one.
     pub aspect_ratio: Option<f32>,
-    /// What was skipped or assumed while loading, for the user.
-    pub warnings: Vec<String>,
 }
 
 /// The entry of `Scene::triangle_lights` for triangles that emit nothing.
@@ -81,30 +129,33 @@ pub struct Surface {
 }
 
 impl Scene {
-    /// Loads a glTF 2.0 scene.
+    /// Loads a glTF 2.0 scene and poses it at time 0 (frame 0), for inspection and tests.
     pub fn load(path: &Path) -> Result<Scene, SceneError> {
-        gltf_loader::load(path)
+        let description = Description::load(path)?;
+        Ok(Prepared::new(Arc::new(description), TimeRange::at(0.0)).pose(0.0))
     }
 
-    /// The corners of every triangle, in triangle order.
-    pub fn triangle_corners(&self) -> Vec<[Vec3; 3]> {
-        self.triangles.iter().map(|t| t.vertices.map(|v| self.positions[v as usize])).collect()
+    /// The number of triangles, fixed and moving.
+    pub fn triangle_count(&self) -> usize {
+        self.fixed.triangles.len() + self.moving.triangles.len()
     }
 
     /// The surface at barycentric coordinates `b` (weights of corners 1 and 2) of `triangle`.
     pub fn surface(&self, triangle: u32, b: Vec2) -> Surface {
-        let t = self.triangles[triangle as usize];
-        let [i0, i1, i2] = t.vertices.map(|v| v as usize);
-        let w = [1.0 - b.x - b.y, b.x, b.y];
-        let interpolate = |a: &[Vec3]| a[i0] * w[0] + a[i1] * w[1] + a[i2] * w[2];
-        let p = interpolate(&self.positions);
-        let ng = (self.positions[i1] - self.positions[i0])
-            .cross(self.positions[i2] - self.positions[i0])
-            .normalize_or_zero();
-        let n = interpolate(&self.normals).normalize_or_zero();
-        let n = if n == Vec3::ZERO { ng } else { n };
-        let uv = self.uvs[i0] * w[0] + self.uvs[i1] * w[1] + self.uvs[i2] * w[2];
-        Surface { p, frame: ShadingFrame { n, ng }, uv, material: t.material }
+        let fixed = self.fixed.triangles.len();
+        match (triangle as usize).checked_sub(fixed) {
+            None => self.fixed.surface(triangle as usize, b),
+            Some(moving) => self.moving.surface(moving, b),
+        }
+    }
+
+    /// The index in `lights` of `triangle`'s emitter, or [`NOT_A_LIGHT`].
+    pub fn triangle_light(&self, triangle: u32) -> u32 {
+        let fixed = self.fixed.triangles.len();
+        match (triangle as usize).checked_sub(fixed) {
+            None => self.fixed_triangle_lights[triangle as usize],
+            Some(moving) => self.moving_triangle_lights[moving],
+        }
     }
 
     /// Radiance that a ray of direction `dir` receives when it leaves the scene.
@@ -114,11 +165,24 @@ impl Scene {
 
     /// The sphere around every triangle (radius 1 at the origin for an empty scene).
     pub fn bounding_sphere(&self) -> BoundingSphere {
-        if self.positions.is_empty() {
-            return BoundingSphere { centre: Vec3::ZERO, radius: 1.0 };
+        bounding_sphere([self.fixed.bounds(), self.moving.bounds()].into_iter().flatten())
+    }
+}
+
+/// The sphere around a set of boxes (radius 1 at the origin when there are none).
+pub fn bounding_sphere(boxes: impl Iterator<Item = (Vec3, Vec3)>) -> BoundingSphere {
+    let union = boxes.reduce(|(a_lo, a_hi), (b_lo, b_hi)| (a_lo.min(b_lo), a_hi.max(b_hi)));
+    match union {
+        Some((lo, hi)) => {
+            BoundingSphere { centre: (lo + hi) / 2.0, radius: ((hi - lo).length() / 2.0).max(1e-6) }
         }
-        let min = self.positions.iter().fold(Vec3::INFINITY, |a, &p| a.min(p));
-        let max = self.positions.iter().fold(Vec3::NEG_INFINITY, |a, &p| a.max(p));
-        BoundingSphere { centre: (min + max) / 2.0, radius: ((max - min).length() / 2.0).max(1e-6) }
+        None => BoundingSphere { centre: Vec3::ZERO, radius: 1.0 },
+    }
+}
+
+impl Description {
+    /// Reads a glTF 2.0 file.
+    pub fn load(path: &Path) -> Result<Description, SceneError> {
+        gltf_loader::load(path)
     }
 }

@@ -94,7 +94,7 @@ impl DirectLight<'_> {
                 })
                 .sum();
         };
-        let light = scene.triangle_lights[hit.triangle as usize];
+        let light = scene.triangle_light(hit.triangle);
         if light == NOT_A_LIGHT {
             return 0.0;
         }

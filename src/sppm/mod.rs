@@ -78,6 +78,8 @@ pub struct PassStats {
     pub photon_rays: u64,
     /// Photons stored for gathering.
     pub photons_stored: u64,
+    /// Points drawn on the camera's aperture (zero for a pinhole).
+    pub lens_samples: u64,
 }
 
 impl std::ops::Add for PassStats {
@@ -88,6 +90,7 @@ impl std::ops::Add for PassStats {
             shadow_rays: self.shadow_rays + o.shadow_rays,
             photon_rays: self.photon_rays + o.photon_rays,
             photons_stored: self.photons_stored + o.photons_stored,
+            lens_samples: self.lens_samples + o.lens_samples,
         }
     }
 }

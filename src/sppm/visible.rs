@@ -42,9 +42,16 @@ pub fn trace_eye_path(renderer: &Renderer, pass: &PassSamples, pixel: usize) -> 
     let (width, height) = (settings.width as usize, settings.height as usize);
     let film = (Vec2::new((pixel % width) as f32, (pixel / width) as f32) + rng.next_2d())
         / Vec2::new(width as f32, height as f32);
-    let (mut origin, mut direction) = scene.camera.ray(film, width as f32 / height as f32);
-    let mut result = EyeResult { radiance: 0.0, point: None };
     let mut stats = PassStats::default();
+    let aspect = width as f32 / height as f32;
+    let (mut origin, mut direction) = match scene.camera.lens {
+        Some(_) => {
+            stats.lens_samples += 1;
+            scene.camera.ray_through_lens(film, aspect, rng.next_2d())
+        }
+        None => scene.camera.ray(film, aspect),
+    };
+    let mut result = EyeResult { radiance: 0.0, point: None };
     let mut beta = 1.0f32;
     for _ in 0..MAX_DEPTH {
         stats.eye_rays += 1;

@@ -6,7 +6,7 @@ use std::path::{Path, PathBuf};
 use std::process::{Command, Output};
 
 use base64::Engine;
-use caustic::frames::{self, ProgressStyle, RenderSettings};
+use caustic::frames::{self, RenderSettings};
 use serde_json::{json, Value};
 
 /// The repository's bundled scene `name`.
@@ -16,20 +16,7 @@ pub fn bundled_scene(name: &str) -> PathBuf {
 
 /// Settings for a quiet render of `scene` into `out`.
 pub fn settings(scene: &Path, out: &Path, passes: u64) -> RenderSettings {
-    RenderSettings {
-        scene: scene.to_path_buf(),
-        out_dir: out.to_path_buf(),
-        passes: Some(passes),
-        time_budget_s: None,
-        photons: None,
-        alpha: 2.0 / 3.0,
-        radius: None,
-        resolution: None,
-        seed: 1,
-        progress: ProgressStyle::None,
-        wavelength_nm: None,
-        spectral_bins: 0,
-    }
+    RenderSettings { passes: Some(passes), ..RenderSettings::new(scene, out) }
 }
 
 /// A rendered image: linear Rec.709, row-major from the top-left.
@@ -80,7 +67,7 @@ impl Image {
 pub fn render(settings: &RenderSettings, threads: usize) -> Image {
     let pool = rayon::ThreadPoolBuilder::new().num_threads(threads).build().unwrap();
     let report = pool.install(|| frames::render(settings)).unwrap_or_else(|e| panic!("render failed: {e}"));
-    read_exr(&report.path)
+    read_exr(&report.frames[0].path)
 }
 
 /// Reads `Combined.R/G/B` of an EXR written by Caustic.

@@ -1,0 +1,59 @@
+//! Progress as the user sees it: a bar on the terminal, or JSON lines on stdout for the add-on.
+
+/// How progress is shown.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, clap::ValueEnum)]
+pub enum ProgressStyle {
+    /// A progress bar on the terminal (stderr).
+    Bar,
+    /// One JSON object per pass on stdout.
+    Json,
+    /// Nothing.
+    None,
+}
+
+/// Shows passes as they finish.
+pub struct Progress {
+    style: ProgressStyle,
+    bar: Option<indicatif::ProgressBar>,
+    limit: Option<u64>,
+    frame: i32,
+}
+
+impl Progress {
+    /// A display for a frame of `limit` passes (or until the time budget).
+    pub fn new(style: ProgressStyle, frame: i32, limit: Option<u64>) -> Self {
+        let bar = (style == ProgressStyle::Bar).then(|| {
+            let bar =
+                indicatif::ProgressBar::with_draw_target(limit, indicatif::ProgressDrawTarget::stderr());
+            // Without a pass count the time budget ends the frame: show passes and time only.
+            let template = match limit {
+                Some(_) => "{prefix} [{bar:40}] pass {pos}/{len} {elapsed_precise} eta {eta}",
+                None => "{prefix} pass {pos} {elapsed_precise} (until the time budget)",
+            };
+            let style = indicatif::ProgressStyle::with_template(template).expect("valid template");
+            bar.set_style(style.progress_chars("=> "));
+            bar.set_prefix(format!("frame {frame}"));
+            bar
+        });
+        Progress { style, bar, limit, frame }
+    }
+
+    /// Reports that `pass` passes are done after `elapsed_s` seconds.
+    pub fn update(&self, pass: u64, elapsed_s: f64) {
+        match self.style {
+            ProgressStyle::Bar => self.bar.as_ref().expect("bar style has a bar").set_position(pass),
+            ProgressStyle::Json => println!(
+                "{}",
+                serde_json::json!({"frame": self.frame, "pass": pass, "passes": self.limit, "elapsed_s": elapsed_s})
+            ),
+            ProgressStyle::None => {}
+        }
+    }
+
+    /// Clears the bar.
+    pub fn finish(&self) {
+        if let Some(bar) = &self.bar {
+            bar.finish_and_clear();
+        }
+    }
+}

@@ -1,0 +1,131 @@
+//! What a scene file says, independent of time: mesh instances in their nodes' local space,
+//! lights and the camera attached to nodes, the node rig with its animation, materials and the
+//! scene-wide settings from the `caustic` extras. [`super::pose`] turns it into a render-ready
+//! [`super::Scene`] at a time.
+
+use glam::{Vec2, Vec3};
+
+use super::animation::Rig;
+use super::TriangleRef;
+use crate::geometry::Cone;
+use crate::lights::World;
+use crate::materials::Material;
+use crate::spectrum::RgbSpectrum;
+
+/// Triangles attached to a node, in the node's local space.
+#[derive(Clone, Debug)]
+pub struct MeshInstance {
+    /// The glTF node it hangs from.
+    pub node: usize,
+    /// The mesh's name, for messages.
+    pub name: String,
+    /// Local vertex positions.
+    pub positions: Vec<Vec3>,
+    /// Local vertex normals (zero where the file has none: the face normal is used).
+    pub normals: Vec<Vec3>,
+    /// Texture coordinates (zero where the file has none).
+    pub uvs: Vec<Vec2>,
+    /// Triangles, indexing this instance's vertices.
+    pub triangles: Vec<TriangleRef>,
+}
+
+/// A punctual light's kind and emission (see `crate::lights` for units).
+#[derive(Clone, Debug)]
+pub enum PunctualKind {
+    /// Radiant intensity, W/sr.
+    Point(RgbSpectrum),
+    /// Radiant intensity on the axis and the cones.
+    Spot(RgbSpectrum, Cone, Cone),
+    /// Irradiance, W/m^2, and the sun's disc.
+    Sun(RgbSpectrum, Cone),
+}
+
+/// A `KHR_lights_punctual` light on a node (it shines down the node's local -z).
+#[derive(Clone, Debug)]
+pub struct PunctualLight {
+    /// The glTF node.
+    pub node: usize,
+    /// What it emits.
+    pub kind: PunctualKind,
+}
+
+/// The thin lens of a camera (DESIGN.md: aperture radius = focal length / (2 f-stop), as Cycles).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Lens {
+    /// Aperture radius in scene units (zero: a pinhole).
+    pub aperture_radius: f32,
+    /// Distance to the plane in focus, scene units.
+    pub focus_distance: f32,
+    /// Polygonal aperture blades (0 or fewer than 3: a round aperture).
+    pub blades: u32,
+    /// Rotation of the blades, radians.
+    pub blade_rotation: f32,
+}
+
+/// The camera on its node.
+#[derive(Clone, Debug)]
+pub struct CameraInstance {
+    /// The glTF node.
+    pub node: usize,
+    /// Vertical field of view, radians.
+    pub yfov: f32,
+    /// The file's aspect ratio, if any.
+    pub aspect_ratio: Option<f32>,
+    /// Focal length in millimetres (from the extras, else from the field of view and a 36 mm
+    /// sensor width), for the aperture.
+    pub focal_length_mm: f32,
+    /// The lens from the extras (`None`: a pinhole unless flags give an f-stop).
+    pub lens: Option<LensSettings>,
+}
+
+/// Depth-of-field settings as the user gives them.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct LensSettings {
+    /// f-number (0: a pinhole).
+    pub fstop: f32,
+    /// Focus distance, scene units.
+    pub focus_distance: f32,
+    /// Aperture blades.
+    pub blades: u32,
+    /// Blade rotation, degrees.
+    pub blade_rotation_deg: f32,
+}
+
+/// The shutter: open for `length` frames, placed around the frame as Blender places it.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Shutter {
+    /// Open time in frames, relative to the frame (START: 0, CENTER: -length/2, END: -length).
+    pub open: f32,
+    /// Length in frames (0: no motion blur).
+    pub length: f32,
+}
+
+impl Shutter {
+    /// No motion blur.
+    pub const CLOSED: Shutter = Shutter { open: 0.0, length: 0.0 };
+}
+
+/// Everything the file says.
+#[derive(Debug)]
+pub struct Description {
+    /// Every node's motion.
+    pub rig: Rig,
+    /// Meshes (and area lights, as emitting triangles) on their nodes.
+    pub meshes: Vec<MeshInstance>,
+    /// Punctual lights on their nodes.
+    pub lights: Vec<PunctualLight>,
+    /// The camera.
+    pub camera: CameraInstance,
+    /// Materials.
+    pub materials: Vec<Material>,
+    /// The world, if any.
+    pub world: Option<World>,
+    /// Resolution from the extras.
+    pub resolution: Option<[u32; 2]>,
+    /// Frames per second (the extras' `fps`, 24 when absent).
+    pub fps: f32,
+    /// The shutter from the extras.
+    pub shutter: Shutter,
+    /// What was skipped or assumed while loading.
+    pub warnings: Vec<String>,
+}

@@ -1,0 +1,94 @@
+//! glTF materials into Caustic materials: metallic-roughness, transmission, the index of
+//! refraction and its dispersion law, emission, and base-colour textures.
+
+use std::sync::Arc;
+
+use glam::Vec3;
+
+use super::extras::{self, MaterialExtras};
+use crate::materials::{BaseColour, Material, Texture};
+use crate::spectrum::{Dispersion, RgbSpectrum};
+
+/// A glTF material as a Caustic material.
+pub fn material(m: &gltf::Material, images: &[gltf::image::Data]) -> Result<Material, String> {
+    let name = m.name().unwrap_or("unnamed").to_string();
+    let pbr = m.pbr_metallic_roughness();
+    let factor = Vec3::from_slice(&pbr.base_color_factor()[..3]);
+    let base_colour = match pbr.base_color_texture() {
+        Some(info) => {
+            let image = &images[info.texture().source().index()];
+            BaseColour::Texture(Arc::new(
+                texture(image, factor).map_err(|e| format!("material '{name}': {e}"))?,
+            ))
+        }
+        None => BaseColour::Constant(RgbSpectrum::reflectance(factor)),
+    };
+    let emission = Vec3::from(m.emissive_factor()) * m.emissive_strength().unwrap_or(1.0);
+    Ok(Material {
+        name,
+        base_colour,
+        metallic: pbr.metallic_factor().clamp(0.0, 1.0),
+        roughness: pbr.roughness_factor().clamp(0.0, 1.0),
+        transmission: m.transmission().map_or(0.0, |t| t.transmission_factor()).clamp(0.0, 1.0),
+        ior: dispersion_law(m).map_err(|e| format!("material '{}': {e}", m.name().unwrap_or("unnamed")))?,
+        emission: (emission.max_element() > 0.0).then(|| RgbSpectrum::illuminant(emission)),
+        emits_both_sides: true,
+    })
+}
+
+/// The material's index against wavelength: the `caustic` extras first, then
+/// `KHR_materials_dispersion` (read raw: the gltf crate does not type it), then a constant.
+fn dispersion_law(m: &gltf::Material) -> Result<Dispersion, String> {
+    let n_d = m.ior().unwrap_or(1.5);
+    let extras: MaterialExtras = extras::parse(m.extras()).map_err(|e| format!("extras `caustic`: {e}"))?;
+    if let Some(name) = &extras.glass {
+        return Dispersion::glass(name).ok_or_else(|| {
+            format!(
+                "extras `caustic.glass`: unknown glass '{name}' (the catalogue has {})",
+                Dispersion::glass_names().join(", ")
+            )
+        });
+    }
+    if let Some(s) = &extras.sellmeier {
+        if s.b.len() != s.c.len() || s.b.is_empty() || s.b.len() > 4 {
+            return Err(
+                "extras `caustic.sellmeier`: `b` and `c` need the same number of terms, 1 to 4".into()
+            );
+        }
+        let (mut b, mut c) = ([0.0; 4], [0.0; 4]);
+        b[..s.b.len()].copy_from_slice(&s.b);
+        c[..s.c.len()].copy_from_slice(&s.c);
+        return Ok(Dispersion::Sellmeier { b, c });
+    }
+    if let Some(table) = &extras.ior_table {
+        return Dispersion::table(table.iter().map(|&[l, n]| (l, n)).collect())
+            .map_err(|e| format!("extras `caustic.ior_table`: {e}"));
+    }
+    let khr = m.extension_value("KHR_materials_dispersion").and_then(|v| v["dispersion"].as_f64());
+    let v_d = match (extras.abbe, khr) {
+        (Some(v_d), _) if v_d > 0.0 => Some(v_d),
+        (Some(v_d), _) => {
+            return Err(format!("extras `caustic.abbe`: expected a positive Abbe number, got {v_d}"))
+        }
+        (None, Some(dispersion)) if dispersion > 0.0 => Some((20.0 / dispersion) as f32),
+        _ => None,
+    };
+    Ok(match v_d {
+        Some(v_d) => Dispersion::Abbe { n_d, v_d },
+        None => Dispersion::Constant(n_d),
+    })
+}
+
+fn texture(image: &gltf::image::Data, factor: Vec3) -> Result<Texture, String> {
+    use gltf::image::Format;
+    let channels = match image.format {
+        Format::R8G8B8 => 3,
+        Format::R8G8B8A8 => 4,
+        other => {
+            return Err(format!(
+                "base colour texture format {other:?} is not supported (use 8-bit RGB or RGBA)"
+            ))
+        }
+    };
+    Ok(Texture::from_srgb8(image.width as usize, image.height as usize, channels, &image.pixels, factor))
+}

@@ -1,0 +1,229 @@
+//! Posing a [`Description`] at a time: the fixed part once per time range, the moving part per
+//! time (DESIGN.md: static geometry is built once per range; moving objects per time).
+//!
+//! A mesh, light or camera is moving over a range when its node or an ancestor has a track whose
+//! value changes within it; everything else is flattened to world space once and shared (`Arc`)
+//! by every pose. A scene with nothing moving is posed once and never again.
+
+use std::sync::Arc;
+
+use glam::{Mat3, Mat4, Vec3};
+
+use super::description::{Description, Lens, LensSettings, MeshInstance, PunctualKind, PunctualLight};
+use super::{bounding_sphere, Geometry, Scene, NOT_A_LIGHT};
+use crate::camera::Camera;
+use crate::lights::Light;
+use crate::materials::Material;
+
+/// A span of glTF time, in seconds, that a render covers (frames and their shutters).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct TimeRange {
+    /// The earliest time.
+    pub start: f32,
+    /// The latest time.
+    pub end: f32,
+}
+
+impl TimeRange {
+    /// The single instant `time`.
+    pub fn at(time: f32) -> Self {
+        TimeRange { start: time, end: time }
+    }
+}
+
+/// A description made ready for a time range: its fixed part built, its moving parts listed.
+#[derive(Debug)]
+pub struct Prepared {
+    /// What the file says.
+    pub description: Arc<Description>,
+    /// The range it is ready for.
+    pub range: TimeRange,
+    fixed: Arc<Geometry>,
+    fixed_lights: Vec<Light>,
+    fixed_triangle_lights: Arc<Vec<u32>>,
+    moving_meshes: Vec<usize>,
+    moving_lights: Vec<usize>,
+    camera_moves: bool,
+    lens: Option<Lens>,
+    materials: Arc<Vec<Material>>,
+}
+
+/// Flattens `mesh` with the world matrix `world` into `out`.
+fn flatten(mesh: &MeshInstance, world: Mat4, out: &mut Geometry) {
+    let normal_matrix = Mat3::from_mat4(world).inverse().transpose();
+    let mirrored = Mat3::from_mat4(world).determinant() < 0.0;
+    let base = out.positions.len() as u32;
+    out.positions.extend(mesh.positions.iter().map(|&p| world.transform_point3(p)));
+    out.normals.extend(mesh.normals.iter().map(|&n| (normal_matrix * n).normalize_or_zero()));
+    out.uvs.extend_from_slice(&mesh.uvs);
+    out.triangles.extend(mesh.triangles.iter().map(|t| {
+        let [a, b, c] = t.vertices.map(|v| base + v);
+        super::TriangleRef { vertices: if mirrored { [a, c, b] } else { [a, b, c] }, material: t.material }
+    }));
+}
+
+/// The triangle lights of `geometry` (numbered from `first_light`), and each triangle's light.
+fn triangle_lights(
+    geometry: &Geometry,
+    materials: &[Material],
+    first_light: usize,
+) -> (Vec<Light>, Vec<u32>) {
+    let mut lights = Vec::new();
+    let mut of_triangle = vec![NOT_A_LIGHT; geometry.triangles.len()];
+    for (i, (t, corners)) in geometry.triangles.iter().zip(geometry.corners()).enumerate() {
+        let material = &materials[t.material as usize];
+        if let Some(radiance) = material.emission {
+            of_triangle[i] = (first_light + lights.len()) as u32;
+            lights.push(Light::Triangle { corners, radiance, both_sides: material.emits_both_sides });
+        }
+    }
+    (lights, of_triangle)
+}
+
+/// A punctual light posed with its node's world matrix (the sphere is set by the pose).
+fn punctual(light: &PunctualLight, world: Mat4) -> Light {
+    let position = world.transform_point3(Vec3::ZERO);
+    let axis = world.transform_vector3(-Vec3::Z).normalize();
+    match &light.kind {
+        PunctualKind::Point(intensity) => Light::Point { position, intensity: *intensity },
+        PunctualKind::Spot(intensity, inner, outer) => {
+            Light::Spot { position, axis, intensity: *intensity, inner: *inner, outer: *outer }
+        }
+        PunctualKind::Sun(irradiance, disc) => {
+            Light::Sun { direction: axis, irradiance: *irradiance, disc: *disc, sphere: Default::default() }
+        }
+    }
+}
+
+/// The thin lens the settings ask for, or `None` for a pinhole.
+pub fn lens(settings: Option<LensSettings>, focal_length_mm: f32) -> Option<Lens> {
+    let s = settings?;
+    (s.fstop > 0.0).then(|| Lens {
+        aperture_radius: focal_length_mm / 1000.0 / (2.0 * s.fstop),
+        focus_distance: s.focus_distance,
+        blades: s.blades,
+        blade_rotation: s.blade_rotation_deg.to_radians(),
+    })
+}
+
+impl Prepared {
+    /// Builds the fixed part of `description` for `range`, with the camera's own lens.
+    pub fn new(description: Arc<Description>, range: TimeRange) -> Self {
+        let camera = &description.camera;
+        let lens = lens(camera.lens, camera.focal_length_mm);
+        Self::with_lens(description, range, lens)
+    }
+
+    /// Builds the fixed part of `description` for `range`, with `lens` on the camera.
+    pub fn with_lens(description: Arc<Description>, range: TimeRange, lens: Option<Lens>) -> Self {
+        let rig = &description.rig;
+        let moves = |node: usize| rig.moves_within(node, range.start, range.end);
+        let (moving_meshes, fixed_meshes): (Vec<usize>, Vec<usize>) =
+            (0..description.meshes.len()).partition(|&m| moves(description.meshes[m].node));
+        let (moving_lights, fixed_punctual): (Vec<usize>, Vec<usize>) =
+            (0..description.lights.len()).partition(|&l| moves(description.lights[l].node));
+        let mut fixed = Geometry::default();
+        for &m in &fixed_meshes {
+            let mesh = &description.meshes[m];
+            flatten(mesh, rig.world(mesh.node, range.start), &mut fixed);
+        }
+        let mut fixed_lights: Vec<Light> = fixed_punctual
+            .iter()
+            .map(|&l| punctual(&description.lights[l], rig.world(description.lights[l].node, range.start)))
+            .collect();
+        let (emitters, fixed_triangle_lights) =
+            triangle_lights(&fixed, &description.materials, fixed_lights.len());
+        fixed_lights.extend(emitters);
+        Prepared {
+            camera_moves: moves(description.camera.node),
+            materials: Arc::new(description.materials.clone()),
+            description,
+            range,
+            fixed: Arc::new(fixed),
+            fixed_lights,
+            fixed_triangle_lights: Arc::new(fixed_triangle_lights),
+            moving_meshes,
+            moving_lights,
+            lens,
+        }
+    }
+
+    /// Whether anything moves within the range (else one pose serves every time).
+    pub fn has_motion(&self) -> bool {
+        !self.moving_meshes.is_empty() || !self.moving_lights.is_empty() || self.camera_moves
+    }
+
+    /// Whether the camera moves within the range.
+    pub fn camera_moves(&self) -> bool {
+        self.camera_moves
+    }
+
+    /// Whether lights move within the range.
+    pub fn lights_move(&self) -> bool {
+        !self.moving_lights.is_empty()
+            || self.moving_meshes.iter().any(|&m| {
+                let mesh = &self.description.meshes[m];
+                mesh.triangles.iter().any(|t| self.materials[t.material as usize].emission.is_some())
+            })
+    }
+
+    /// Triangles in the fixed part, and in the moving part.
+    pub fn triangle_counts(&self) -> (usize, usize) {
+        let moving = self.moving_meshes.iter().map(|&m| self.description.meshes[m].triangles.len()).sum();
+        (self.fixed.triangles.len(), moving)
+    }
+
+    /// The fixed part's triangle corners (for its BVH, built once).
+    pub fn fixed_corners(&self) -> Vec<[Vec3; 3]> {
+        self.fixed.corners()
+    }
+
+    /// The lens on the camera.
+    pub fn lens(&self) -> Option<Lens> {
+        self.lens
+    }
+
+    /// The scene at `time` seconds (within the range).
+    pub fn pose(&self, time: f32) -> Scene {
+        let d = &self.description;
+        let mut moving = Geometry::default();
+        for &m in &self.moving_meshes {
+            flatten(&d.meshes[m], d.rig.world(d.meshes[m].node, time), &mut moving);
+        }
+        let mut lights = self.fixed_lights.clone();
+        lights.extend(
+            self.moving_lights.iter().map(|&l| punctual(&d.lights[l], d.rig.world(d.lights[l].node, time))),
+        );
+        let (emitters, moving_triangle_lights) = triangle_lights(&moving, &self.materials, lights.len());
+        lights.extend(emitters);
+        let sphere = bounding_sphere([self.fixed.bounds(), moving.bounds()].into_iter().flatten());
+        let mut distant_lights = Vec::new();
+        for (i, light) in lights.iter_mut().enumerate() {
+            if let Light::Sun { sphere: s, disc, .. } = light {
+                *s = sphere;
+                if !disc.is_delta() {
+                    distant_lights.push(i);
+                }
+            }
+        }
+        if let Some(world) = &d.world {
+            let mut world = world.clone();
+            world.sphere = sphere;
+            distant_lights.push(lights.len());
+            lights.push(Light::World(world));
+        }
+        let camera_world = d.rig.world(d.camera.node, time);
+        Scene {
+            fixed: Arc::clone(&self.fixed),
+            moving,
+            materials: Arc::clone(&self.materials),
+            lights,
+            fixed_triangle_lights: Arc::clone(&self.fixed_triangle_lights),
+            moving_triangle_lights,
+            distant_lights,
+            camera: Camera::from_node(camera_world, d.camera.yfov).with_lens(self.lens),
+            resolution: d.resolution,
+            aspect_ratio: d.camera.aspect_ratio,
+        }
+    }
+}
