@@ -108,6 +108,7 @@ pub struct GltfBuilder {
     cameras: Vec<Value>,
     lights: Vec<Value>,
     images: Vec<Value>,
+    animations: Vec<Value>,
     scene_extras: Option<Value>,
 }
 
@@ -146,6 +147,33 @@ impl GltfBuilder {
     pub fn material(&mut self, material: Value) -> usize {
         self.materials.push(material);
         self.materials.len() - 1
+    }
+
+    /// The index of the node added last.
+    pub fn last_node(&self) -> usize {
+        self.nodes.len() - 1
+    }
+
+    /// Animates `path` ("translation", "rotation" or "scale") of `node` with keys at `times`
+    /// (seconds) and `values` (3 or 4 numbers each, three per key for CUBICSPLINE).
+    pub fn animate(
+        &mut self,
+        node: usize,
+        path: &str,
+        times: &[f32],
+        values: &[Vec<f32>],
+        interpolation: &str,
+    ) {
+        let input = self.add_accessor(times, 1, "SCALAR");
+        self.accessors[input]["min"] = json!([times[0]]);
+        self.accessors[input]["max"] = json!([times[times.len() - 1]]);
+        let width = values[0].len();
+        let flat: Vec<f32> = values.iter().flatten().copied().collect();
+        let output = self.add_accessor(&flat, width, if width == 4 { "VEC4" } else { "VEC3" });
+        self.animations.push(json!({
+            "channels": [{"sampler": 0, "target": {"node": node, "path": path}}],
+            "samplers": [{"input": input, "output": output, "interpolation": interpolation}]
+        }));
     }
 
     /// Adds an image file (relative `uri`) as a texture and returns the texture's index.
@@ -196,8 +224,13 @@ impl GltfBuilder {
 
     /// Adds a perspective camera at `position` looking along `dir`.
     pub fn camera(&mut self, position: [f32; 3], dir: [f32; 3], yfov: f32) {
+        self.camera_with_aspect(position, dir, yfov, 1.0);
+    }
+
+    /// Adds a perspective camera of aspect ratio `aspect` at `position` looking along `dir`.
+    pub fn camera_with_aspect(&mut self, position: [f32; 3], dir: [f32; 3], yfov: f32, aspect: f32) {
         self.cameras.push(
-            json!({"type": "perspective", "perspective": {"yfov": yfov, "znear": 0.01, "aspectRatio": 1.0}}),
+            json!({"type": "perspective", "perspective": {"yfov": yfov, "znear": 0.01, "aspectRatio": aspect}}),
         );
         self.nodes.push(json!({"name": "Camera", "camera": self.cameras.len() - 1, "translation": position, "rotation": look_rotation(dir)}));
     }
@@ -244,6 +277,9 @@ impl GltfBuilder {
         if !self.lights.is_empty() {
             doc["extensionsUsed"] = json!(["KHR_lights_punctual"]);
             doc["extensions"] = json!({"KHR_lights_punctual": {"lights": self.lights}});
+        }
+        if !self.animations.is_empty() {
+            doc["animations"] = json!(self.animations);
         }
         if !self.images.is_empty() {
             doc["images"] = json!(self.images);
