@@ -91,17 +91,23 @@ def set_resolution(width, height):
     scene["caustic"] = {"resolution": [width, height]}
 
 
-def export(name):
-    bpy.ops.export_scene.gltf(
+def export(name, animated=False):
+    options = dict(
         filepath=str(HERE / f"{name}.gltf"),
         export_format="GLTF_SEPARATE",
         export_cameras=True,
         export_lights=True,
         export_extras=True,
         export_apply=True,
-        export_animations=False,
+        export_animations=animated,
         export_yup=True,
     )
+    if animated:
+        # One timeline, sampled once a frame (LINEAR keys), no KHR_animation_pointer (the gltf
+        # crate cannot read it).
+        options.update(export_animation_mode="SCENE", export_force_sampling=True, export_frame_range=True,
+                       export_pointer_animation=False)
+    bpy.ops.export_scene.gltf(**options)
 
 
 def cornell_box(white, red, green):
@@ -156,7 +162,41 @@ def make_spot_glass():
     export("spot_glass")
 
 
+def make_cornell_animated():
+    """The demo box over 24 frames: the glass sphere rolls across, the camera dollies in, with
+    motion blur (half a frame, centred) and depth of field (f/1.4, focused on the sphere's path)."""
+    reset()
+    scene = bpy.context.scene
+    scene.frame_start, scene.frame_end = 1, 24
+    scene.render.fps = 24
+    white = material("White", (0.75, 0.75, 0.75))
+    red = material("Red", (0.63, 0.065, 0.05))
+    green = material("Green", (0.14, 0.45, 0.091))
+    glass = material("Glass", (1.0, 1.0, 1.0), roughness=0.0, transmission=1.0, ior=1.5)
+    cornell_box(white, red, green)
+    sphere = glass_sphere((-0.5, -0.2, 0.55), 0.35, glass)
+    for frame, x in [(1, -0.5), (24, 0.5)]:
+        sphere.location.x = x
+        sphere.keyframe_insert("location", index=0, frame=frame)
+    area_light("CeilingLight", (-0.3, 0.4, 1.98), 0.2, 25.0)
+    cam = camera((0, -3.9, 1.0), (0, 0, 1.0))
+    for frame, y in [(1, -3.9), (24, -3.3)]:
+        cam.location.y = y
+        cam.keyframe_insert("location", index=1, frame=frame)
+    cam.data.dof.use_dof = True
+    cam.data.dof.aperture_fstop = 1.4
+    cam.data.dof.focus_distance = 3.4
+    cam["caustic"] = {"lens": {"fstop": 1.4, "focus_distance": 3.4, "focal_length_mm": cam.data.lens}}
+    scene.render.use_motion_blur = True
+    scene.render.motion_blur_shutter = 0.5
+    set_resolution(240, 180)
+    scene["caustic"] = {"resolution": [240, 180], "fps": 24.0,
+                        "shutter": {"length_frames": 0.5, "position": "CENTER"}}
+    export("cornell_animated", animated=True)
+
+
 if __name__ == "__main__":
+    make_cornell_animated()
     make_cornell_glass()
     make_furnace()
     make_spot_glass()

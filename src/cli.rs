@@ -1,6 +1,6 @@
 //! The command line: arguments to settings, errors to one message and a non-zero exit.
 
-use std::path::PathBuf;
+use std::path::{Path, PathBuf};
 
 use clap::{Args, Parser, Subcommand};
 
@@ -23,6 +23,18 @@ enum Command {
     Render(RenderArgs),
     /// Measure passes, photon paths and rays per second, with 1 and 2 threads, and peak memory.
     Bench(BenchArgs),
+    /// Print, as JSON, what a scene needs (dispersion, motion, depth of field) and what will be skipped.
+    Info(InfoArgs),
+}
+
+/// Flags of `caustic info`.
+#[derive(Args, Debug)]
+pub struct InfoArgs {
+    /// The scene (default: the demo scene).
+    scene: Option<PathBuf>,
+    /// Frames the render would cover: 7, 1-48, 1-48:2 or 1,5,9.
+    #[arg(long, value_name = "SPEC", value_parser = parse_frames, default_value = "1")]
+    frames: FrameList,
 }
 
 /// Flags of `caustic render`.
@@ -234,6 +246,14 @@ pub fn run(cli: Cli) -> Result<(), String> {
                     eprintln!("caustic: skipped {} frames already rendered (--resume)", report.skipped.len());
                 }
             }
+            Ok(())
+        }
+        Command::Info(args) => {
+            let scene = args.scene.unwrap_or_else(|| PathBuf::from(DEMO_SCENE));
+            let settings =
+                RenderSettings { frames: args.frames.0, ..RenderSettings::new(&scene, Path::new(".")) };
+            let report = crate::info::report(&settings)?;
+            println!("{}", serde_json::to_string_pretty(&report).expect("JSON"));
             Ok(())
         }
         Command::Bench(args) => {

@@ -237,6 +237,11 @@ impl Shot {
         &self.sppm
     }
 
+    /// The shutter.
+    pub fn shutter(&self) -> Shutter {
+        self.shutter
+    }
+
     /// The prepared scene (what moves, the lens).
     pub fn prepared(&self) -> &Prepared {
         &self.prepared
@@ -295,11 +300,16 @@ fn run_passes(shot: &Shot, settings: &RenderSettings, frame: i32) -> (Film, u64,
     let progress = Progress::new(settings.progress, frame, limit);
     let start = Instant::now();
     let (mut stats, mut poses, mut pass) = (PassStats::default(), 0, 0);
+    // Without a shutter every pass of a frame sees the same instant: pose it once.
+    let frame_pose = (shot.still.is_none() && shot.shutter.length == 0.0).then(|| {
+        poses += 1;
+        shot.pose(shot.pass_time(frame, 0))
+    });
     loop {
         let posed;
-        let (scene, accel) = match &shot.still {
-            Some((scene, accel)) => (scene, accel),
-            None => {
+        let (scene, accel) = match (&shot.still, &frame_pose) {
+            (Some((scene, accel)), _) | (None, Some((scene, accel))) => (scene, accel),
+            (None, None) => {
                 posed = shot.pose(shot.pass_time(frame, pass));
                 poses += 1;
                 (&posed.0, &posed.1)

@@ -22,6 +22,7 @@ pub mod cli;
 pub mod film;
 pub mod frames;
 pub mod geometry;
+pub mod info;
 pub mod lights;
 pub mod materials;
 pub mod progress;

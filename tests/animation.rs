@@ -192,3 +192,33 @@ fn resume_skips_finished_frames() {
     assert_eq!(report.frames.iter().map(|f| f.frame).collect::<Vec<_>>(), vec![3]);
     assert!(dir.path().join("frame_0003.exr").exists());
 }
+
+/// `caustic info` says what a scene needs: the Blender-exported animated box needs motion blur,
+/// depth of field and a moving camera; the still demo needs none of them and skips their work.
+#[test]
+fn info_reports_what_a_scene_needs() {
+    let info = |scene: &str| {
+        let output = run_caustic(&["info", bundled_scene(scene).to_str().unwrap(), "--frames", "1-24"]);
+        assert!(output.status.success(), "{}", String::from_utf8_lossy(&output.stderr));
+        serde_json::from_slice::<serde_json::Value>(&output.stdout).unwrap()
+    };
+    let animated = info("cornell_animated.gltf");
+    let needs = &animated["needs"];
+    assert_eq!(
+        (needs["motion_blur"].as_bool(), needs["depth_of_field"].as_bool(), needs["moving_camera"].as_bool()),
+        (Some(true), Some(true), Some(true))
+    );
+    assert!(
+        animated["triangles"]["moving"].as_u64().unwrap() > 0
+            && animated["triangles"]["static"].as_u64().unwrap() > 0
+    );
+    let still = info("cornell_glass.gltf");
+    assert_eq!(still["needs"]["motion_blur"], false);
+    assert_eq!(still["needs"]["depth_of_field"], false);
+    assert_eq!(still["triangles"]["moving"], 0);
+    assert!(still["skipped"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .any(|s| s.as_str().unwrap().contains("lens sampling")));
+}

@@ -1,0 +1,47 @@
+//! `caustic info SCENE [--frames SPEC]`: what a scene needs and what the renderer will skip
+//! (DESIGN.md, "Leave out what a scene does not need"), as JSON.
+
+use serde_json::{json, Value};
+
+use crate::frames::{load_description, RenderSettings, Shot};
+
+/// The JSON report for `settings.scene` over `settings.frames`.
+pub fn report(settings: &RenderSettings) -> Result<Value, String> {
+    let description = load_description(settings)?;
+    let dispersion = description.materials.iter().any(|m| m.transmission > 0.0 && m.ior.is_dispersive());
+    let fps = description.fps;
+    let shot = Shot::new(settings, description)?;
+    let prepared = shot.prepared();
+    let (fixed, moving) = prepared.triangle_counts();
+    let shutter = shot.shutter();
+    let needs = json!({
+        "dispersion": dispersion,
+        "motion_blur": shutter.length > 0.0 && prepared.has_motion(),
+        "depth_of_field": prepared.lens().is_some(),
+        "moving_camera": prepared.camera_moves(),
+        "moving_lights": prepared.lights_move(),
+        "per_time_scene": prepared.has_motion(),
+        "reuse_possible": settings.frames.len() > 1 && fixed > 0,
+    });
+    let mut skipped = Vec::new();
+    if !prepared.has_motion() {
+        skipped.push("posing the scene and building a BVH per pass time (nothing moves: one pose, one BVH)");
+    } else if shutter.length == 0.0 {
+        skipped.push("time sampling inside the shutter (no shutter: one pose per frame)");
+    }
+    if prepared.lens().is_none() {
+        skipped.push("lens sampling (no aperture: pinhole rays)");
+    }
+    if !dispersion {
+        skipped.push("wavelength-dependent refraction (no dispersive material)");
+    }
+    Ok(json!({
+        "scene": settings.scene.display().to_string(),
+        "frames": settings.frames,
+        "fps": fps,
+        "shutter_frames": shutter.length,
+        "needs": needs,
+        "triangles": {"static": fixed, "moving": moving},
+        "skipped": skipped,
+    }))
+}
