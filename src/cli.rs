@@ -4,7 +4,9 @@ use std::path::{Path, PathBuf};
 
 use clap::{Args, Parser, Subcommand};
 
+use crate::error::Statistic;
 use crate::frames::{self, ProgressStyle, RenderSettings};
+use crate::monitor::ErrorSettings;
 
 /// The bundled demo scene, used when no scene is given.
 pub const DEMO_SCENE: &str = concat!(env!("CARGO_MANIFEST_DIR"), "/scenes/cornell_glass.gltf");
@@ -25,6 +27,19 @@ enum Command {
     Bench(BenchArgs),
     /// Print, as JSON, what a scene needs (dispersion, motion, depth of field) and what will be skipped.
     Info(InfoArgs),
+    /// Draw error against time from --log files as an SVG chart (estimated, and true when known).
+    Plot(PlotArgs),
+}
+
+/// Flags of `caustic plot`.
+#[derive(Args, Debug)]
+pub struct PlotArgs {
+    /// Log files written by `caustic render --log`.
+    #[arg(required = true)]
+    logs: Vec<PathBuf>,
+    /// The chart to write (SVG).
+    #[arg(short, long = "out", value_name = "SVG")]
+    out: PathBuf,
 }
 
 /// Flags of `caustic info`.
@@ -95,6 +110,21 @@ pub struct RenderArgs {
     /// Distance to the plane in focus, scene units; default: the scene's camera, else 10.
     #[arg(long, value_name = "D", allow_negative_numbers = true, value_parser = non_negative_f32)]
     focus_distance: Option<f32>,
+    /// Confidence of the per-pixel error bound (Error.Y), in (0, 1).
+    #[arg(long, value_name = "C", default_value_t = 0.9, allow_negative_numbers = true, value_parser = unit_interval)]
+    confidence: f64,
+    /// Append error-against-time lines (JSON) for each frame to FILE.
+    #[arg(long, value_name = "FILE")]
+    log: Option<PathBuf>,
+    /// A converged render to measure the true error against (#### becomes the frame number).
+    #[arg(long, value_name = "EXR")]
+    reference: Option<PathBuf>,
+    /// End a frame when the relative error bound's statistic falls below E (e.g. 0.05).
+    #[arg(long, value_name = "E", allow_negative_numbers = true, value_parser = positive_f64)]
+    target_error: Option<f64>,
+    /// The statistic --target-error compares: mean, median or p90 of the relative bound.
+    #[arg(long, value_enum, default_value_t = Statistic::Mean)]
+    target_statistic: Statistic,
 }
 
 /// Flags of `caustic bench`.
@@ -215,6 +245,12 @@ impl RenderArgs {
             shutter_frames: self.shutter,
             fstop: self.fstop,
             focus_distance: self.focus_distance,
+            errors: ErrorSettings {
+                confidence: self.confidence,
+                log: self.log.clone(),
+                reference: self.reference.clone(),
+                target: self.target_error.map(|e| (e, self.target_statistic)),
+            },
         }
     }
 }
@@ -256,6 +292,7 @@ pub fn run(cli: Cli) -> Result<(), String> {
             println!("{}", serde_json::to_string_pretty(&report).expect("JSON"));
             Ok(())
         }
+        Command::Plot(args) => crate::plot::plot(&args.logs, &args.out),
         Command::Bench(args) => {
             let scene = args.scene.unwrap_or_else(|| PathBuf::from(DEMO_SCENE));
             crate::bench::run(&scene, args.resolution, args.passes)

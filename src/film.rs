@@ -81,7 +81,8 @@ pub struct PixelSums {
     pub xyz: DVec3,
     /// Sum of the squared luminance estimates.
     pub y_squared: f64,
-    /// Sum of the luminance of the Laplacian term.
+    /// Sum over passes of r_i^2 times the luminance of the pass's Laplacian estimate (the bias
+    /// term of the error bound, see `crate::error`).
     pub laplacian_y: f64,
     /// Number of passes summed.
     pub passes: u64,
@@ -131,8 +132,16 @@ impl Film {
         }
     }
 
-    /// Adds one pass: `radiance[i]` and `laplacian[i]` at `lambda_nm`, sampled with density `pdf`.
-    pub fn add_pass(&mut self, lambda_nm: f32, pdf: f32, estimates: impl Iterator<Item = (f32, f32)>) {
+    /// Adds one pass of gather radius `radius`: `radiance[i]` and `laplacian[i]` at `lambda_nm`,
+    /// sampled with density `pdf`.
+    pub fn add_pass(
+        &mut self,
+        lambda_nm: f32,
+        pdf: f32,
+        radius: f32,
+        estimates: impl Iterator<Item = (f32, f32)>,
+    ) {
+        let radius2 = f64::from(radius) * f64::from(radius);
         let weight = match self.mode {
             FilmMode::Spectral => (cmf(lambda_nm) / pdf).as_dvec3(),
             FilmMode::Monochromatic { .. } => display_xyz(lambda_nm) / f64::from(d65(lambda_nm)),
@@ -153,7 +162,7 @@ impl Film {
             let xyz = weight * f64::from(radiance);
             sums.xyz += xyz;
             sums.y_squared += xyz.y * xyz.y;
-            sums.laplacian_y += weight.y * f64::from(laplacian);
+            sums.laplacian_y += weight.y * radius2 * f64::from(laplacian);
             sums.passes += 1;
             if let Some(band) = band {
                 self.bins.sums[i * self.bins.count + band] += f64::from(radiance) * band_weight;
@@ -167,6 +176,11 @@ impl Film {
             return DVec3::ONE;
         }
         d65_xyz() / (self.white_xyz / self.passes as f64)
+    }
+
+    /// The luminance scale of the white balance (what `rgb` applies to Y).
+    pub fn luminance_scale(&self) -> f64 {
+        self.white_balance().y
     }
 
     /// The mean linear Rec.709 colour of every pixel.
@@ -183,8 +197,9 @@ impl Film {
             .collect()
     }
 
-    /// Writes the image to `path` through a temporary file beside it.
-    pub fn write_exr(&self, path: &Path) -> std::result::Result<(), String> {
+    /// Writes the image, with `extra` channels (name, one value per pixel), to `path` through a
+    /// temporary file beside it.
+    pub fn write_exr(&self, path: &Path, extra: &[(&str, Vec<f32>)]) -> std::result::Result<(), String> {
         let rgb = self.rgb();
         let (w, h) = (self.width as usize, self.height as usize);
         let channel = |name: &str, values: Vec<f32>| AnyChannel::new(name, FlatSamples::F32(values));
@@ -195,6 +210,9 @@ impl Film {
             channel("Combined.B", component(2)),
             channel("Combined.A", vec![1.0; w * h]),
         ];
+        for (name, values) in extra {
+            list.push(channel(name, values.clone()));
+        }
         for k in 0..self.bins.count {
             let passes = self.passes.max(1) as f64;
             let band =
@@ -225,7 +243,7 @@ mod tests {
         let mut film = Film::new(2, 1, FilmMode::Spectral, 0);
         for i in 0..passes {
             let (lambda, pdf) = sample_visible_wavelength(pass_sample(5, i));
-            film.add_pass(lambda, pdf, [(radiance(lambda), 0.0), (radiance(lambda), 0.0)].into_iter());
+            film.add_pass(lambda, pdf, 0.1, [(radiance(lambda), 0.0), (radiance(lambda), 0.0)].into_iter());
         }
         film
     }
@@ -242,7 +260,7 @@ mod tests {
     fn one_wavelength_shows_white_as_luminance_one_in_its_own_colour() {
         for lambda in [450.0, 550.0, 650.0] {
             let mut film = Film::new(1, 1, FilmMode::Monochromatic { lambda_nm: lambda }, 0);
-            film.add_pass(lambda, 1.0, [(0.5 * d65(lambda), 0.0)].into_iter());
+            film.add_pass(lambda, 1.0, 0.1, [(0.5 * d65(lambda), 0.0)].into_iter());
             let rgb = film.rgb()[0];
             let luminance = 0.2126 * rgb.x + 0.7152 * rgb.y + 0.0722 * rgb.z;
             assert!((luminance - 0.5).abs() < 1e-3 && rgb.min_element() >= -1e-9, "{lambda}: {rgb}");
@@ -261,7 +279,7 @@ mod tests {
         let mut film = Film::new(1, 1, FilmMode::Spectral, 47);
         for i in 0..40_000 {
             let (lambda, pdf) = sample_visible_wavelength(pass_sample(9, i));
-            film.add_pass(lambda, pdf, [(2.0, 0.0)].into_iter());
+            film.add_pass(lambda, pdf, 0.1, [(2.0, 0.0)].into_iter());
         }
         let bands: Vec<f64> = film.bins.sums.iter().map(|s| s / film.passes as f64).collect();
         // A flat spectrum of 2 per nm: every 10 nm band averages 2.

@@ -10,7 +10,9 @@ use std::sync::Arc;
 use std::time::Instant;
 
 use crate::accel::{Accel, Bvh};
+use crate::error::{summarize, ErrorSummary, PixelError};
 use crate::film::{Film, FilmMode};
+use crate::monitor::{ErrorSettings, Monitor, StopReason};
 use crate::progress::Progress;
 pub use crate::progress::ProgressStyle;
 use crate::sampling::pass_time_sample;
@@ -62,6 +64,8 @@ pub struct RenderSettings {
     pub fstop: Option<f32>,
     /// Focus distance override, scene units.
     pub focus_distance: Option<f32>,
+    /// Error bound, log, reference and target.
+    pub errors: ErrorSettings,
 }
 
 impl RenderSettings {
@@ -85,6 +89,7 @@ impl RenderSettings {
             shutter_frames: None,
             fstop: None,
             focus_distance: None,
+            errors: ErrorSettings::default(),
         }
     }
 }
@@ -104,6 +109,10 @@ pub struct FrameReport {
     pub elapsed_s: f64,
     /// Work counts summed over passes.
     pub stats: PassStats,
+    /// What ended the frame.
+    pub stopped_by: StopReason,
+    /// The frame's relative error bound statistics.
+    pub error: ErrorSummary,
 }
 
 /// What a whole render reports.
@@ -273,30 +282,49 @@ pub fn render(settings: &RenderSettings) -> Result<RenderReport, String> {
             report.skipped.push(frame);
             continue;
         }
-        let (film, passes, elapsed_s, stats, poses) = run_passes(&shot, settings, frame);
-        report.poses += poses;
+        let run = run_passes(&shot, settings, frame)?;
+        report.poses += run.poses;
+        let film = run.film;
         if film.non_finite_estimates > 0 {
             eprintln!(
                 "caustic: warning: frame {frame}: {} pixel estimates were NaN or infinite and counted as zero (please report this scene)",
                 film.non_finite_estimates
             );
         }
-        film.write_exr(&path)?;
-        report.frames.push(FrameReport { frame, path, film, passes, elapsed_s, stats });
+        let bound = run.errors.iter().map(|e| e.bound as f32).collect();
+        let variance = run.errors.iter().map(|e| e.variance as f32).collect();
+        film.write_exr(&path, &[("Error.Y", bound), ("Variance.Y", variance)])?;
+        let error = summarize(&run.errors);
+        let (passes, elapsed_s, stats, stopped_by) = (film.passes, run.elapsed_s, run.stats, run.stopped_by);
+        report.frames.push(FrameReport { frame, path, film, passes, elapsed_s, stats, stopped_by, error });
     }
     Ok(report)
 }
 
-/// Runs passes 0, 1, ... of `frame` until the pass count or the time budget is reached.
-fn run_passes(shot: &Shot, settings: &RenderSettings, frame: i32) -> (Film, u64, f64, PassStats, u64) {
+/// What a frame's passes produced.
+struct FrameRun {
+    film: Film,
+    errors: Vec<PixelError>,
+    elapsed_s: f64,
+    stats: PassStats,
+    poses: u64,
+    stopped_by: StopReason,
+}
+
+/// Runs passes 0, 1, ... of `frame` until the pass count, the time budget or the target error.
+fn run_passes(shot: &Shot, settings: &RenderSettings, frame: i32) -> Result<FrameRun, String> {
     let s = &shot.sppm;
     let mode = match s.fixed_wavelength_nm {
         Some(lambda_nm) => FilmMode::Monochromatic { lambda_nm },
         None => FilmMode::Spectral,
     };
     let mut film = Film::new(s.width, s.height, mode, settings.spectral_bins);
-    let limit =
-        settings.passes.or(if settings.time_budget_s.is_some() { None } else { Some(DEFAULT_PASSES) });
+    let mut monitor = Monitor::new(&settings.errors, frame, s.width, s.height)?;
+    let limit = settings.passes.or(if settings.time_budget_s.is_some() || settings.errors.target.is_some() {
+        None
+    } else {
+        Some(DEFAULT_PASSES)
+    });
     let progress = Progress::new(settings.progress, frame, limit);
     let start = Instant::now();
     let (mut stats, mut poses, mut pass) = (PassStats::default(), 0, 0);
@@ -320,16 +348,27 @@ fn run_passes(shot: &Shot, settings: &RenderSettings, frame: i32) -> (Film, u64,
         film.add_pass(
             samples.lambda_nm,
             samples.lambda_pdf,
+            samples.radius,
             estimates.iter().map(|e| (e.radiance, e.laplacian)),
         );
         stats = stats + pass_stats;
         pass += 1;
         let elapsed = start.elapsed().as_secs_f64();
         progress.update(pass, elapsed);
-        let out_of_time = settings.time_budget_s.is_some_and(|budget| elapsed >= budget);
-        if limit.is_some_and(|n| pass >= n) || out_of_time {
+        let photons = pass * s.photons_per_pass as u64;
+        let stopped_by = if monitor.after_pass(&film, elapsed, photons)? {
+            Some(StopReason::TargetError)
+        } else if settings.time_budget_s.is_some_and(|budget| elapsed >= budget) {
+            Some(StopReason::TimeBudget)
+        } else if limit.is_some_and(|n| pass >= n) {
+            Some(StopReason::Passes)
+        } else {
+            None
+        };
+        if let Some(stopped_by) = stopped_by {
             progress.finish();
-            return (film, pass, elapsed, stats, poses);
+            let errors = monitor.finish(&film, elapsed, photons, stopped_by)?;
+            return Ok(FrameRun { film, errors, elapsed_s: elapsed, stats, poses, stopped_by });
         }
     }
 }

@@ -1,0 +1,212 @@
+//! The error of a frame (DESIGN.md step 6): per-pixel bounds from the film's sums, frame
+//! summaries, the true error against a reference, and the stopping rule.
+//!
+//! Hachisuka, Jarosz & Jensen 2010, "A Progressive Error Estimation Framework for Photon Density
+//! Estimation": with confidence 1 - beta, the error of a pixel after N passes is bounded by
+//! `E = t_{N-1, 1-beta/2} sqrt(Var / N) + |B|`, where
+//! - `Var` is the sample variance of the per-pass luminance estimates (the film's sums of Y and
+//!   Y^2), `t` Student's quantile;
+//! - `B ~ 1/2 k2 r^2 Laplacian(L)` is the kernel's bias. For the biweight kernel
+//!   `K(t) = 3 / (pi r^2) (1 - t^2)^2` the per-axis second moment is `k2 r^2` with `k2 = 1/8`
+//!   (`E[rho^2] = r^2 / 4` over the disc). Radii shrink from pass to pass, so the film sums
+//!   `r_i^2 Laplacian_i` and the bias of the mean is `1/2 k2 sum(r_i^2 Laplacian_i) / N`.
+//!
+//! The Laplacian estimate is noisy (its kernel varies like 1/r^4); as the paper advises it is
+//! smoothed: here by a 3 x 3 box filter over neighbouring pixels' sums before it is used.
+//!
+//! Frame statistics are of the relative bound `E / max(Y, floor)` over pixels whose value is above
+//! the floor, with floor = 1% of the image's mean luminance (dark pixels have no meaningful
+//! relative error): its mean, median and 90th percentile.
+
+use statrs::distribution::{ContinuousCDF, StudentsT};
+
+use crate::film::Film;
+
+/// The biweight kernel's per-axis second moment over r^2.
+pub const K2: f64 = 1.0 / 8.0;
+
+/// A pixel's value and error estimates (luminance).
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
+pub struct PixelError {
+    /// The pixel's luminance Y.
+    pub value: f64,
+    /// The estimated variance of the pixel's value (sample variance over passes / passes).
+    pub variance: f64,
+    /// The bias estimate.
+    pub bias: f64,
+    /// The error bound at the requested confidence.
+    pub bound: f64,
+}
+
+/// Student's t quantile for a two-sided interval of `confidence` with `passes - 1` degrees of
+/// freedom (infinite for fewer than 2 passes).
+pub fn t_quantile(confidence: f64, passes: u64) -> f64 {
+    if passes < 2 {
+        return f64::INFINITY;
+    }
+    let t = StudentsT::new(0.0, 1.0, (passes - 1) as f64).expect("valid degrees of freedom");
+    t.inverse_cdf(0.5 + confidence / 2.0)
+}
+
+/// Every pixel's error estimates at `confidence` (e.g. 0.9).
+pub fn pixel_errors(film: &Film, confidence: f64) -> Vec<PixelError> {
+    let (w, h) = (film.width as usize, film.height as usize);
+    let scale = film.luminance_scale();
+    let t = t_quantile(confidence, film.passes);
+    let smoothed_laplacian =
+        box_filter_3x3(&film.pixels.iter().map(|p| p.laplacian_y).collect::<Vec<_>>(), w, h);
+    film.pixels
+        .iter()
+        .zip(smoothed_laplacian)
+        .map(|(p, laplacian)| {
+            if p.passes == 0 {
+                return PixelError::default();
+            }
+            let n = p.passes as f64;
+            let mean = p.xyz.y / n;
+            let sample_variance =
+                if p.passes > 1 { ((p.y_squared - n * mean * mean) / (n - 1.0)).max(0.0) } else { 0.0 };
+            let variance = sample_variance / n * scale * scale;
+            let bias = 0.5 * K2 * laplacian / n * scale;
+            let bound = t * variance.sqrt() + bias.abs();
+            PixelError { value: mean * scale, variance, bias, bound }
+        })
+        .collect()
+}
+
+/// The 3 x 3 box average of an image (edges average what exists).
+fn box_filter_3x3(values: &[f64], w: usize, h: usize) -> Vec<f64> {
+    (0..w * h)
+        .map(|i| {
+            let (x, y) = (i % w, i / w);
+            let (mut sum, mut count) = (0.0, 0.0);
+            for yy in y.saturating_sub(1)..(y + 2).min(h) {
+                for xx in x.saturating_sub(1)..(x + 2).min(w) {
+                    sum += values[yy * w + xx];
+                    count += 1.0;
+                }
+            }
+            sum / count
+        })
+        .collect()
+}
+
+/// Summary statistics of a frame's relative error bounds.
+#[derive(Clone, Copy, Debug, Default, PartialEq, serde::Serialize)]
+pub struct ErrorSummary {
+    /// Mean of E / Y over pixels above the floor.
+    pub mean: f64,
+    /// Median of the same.
+    pub median: f64,
+    /// 90th percentile of the same.
+    pub p90: f64,
+}
+
+/// The floor below which a pixel has no meaningful relative error: 1% of the mean luminance.
+fn relative_floor(values: impl Iterator<Item = f64> + Clone) -> f64 {
+    let count = values.clone().count().max(1) as f64;
+    0.01 * values.sum::<f64>() / count
+}
+
+/// The `q` quantile (0..1) of `values` (reordered).
+fn quantile(values: &mut [f64], q: f64) -> f64 {
+    if values.is_empty() {
+        return 0.0;
+    }
+    let k = ((values.len() - 1) as f64 * q).round() as usize;
+    *values.select_nth_unstable_by(k, f64::total_cmp).1
+}
+
+/// Mean, median and 90th percentile of the relative bounds.
+pub fn summarize(errors: &[PixelError]) -> ErrorSummary {
+    let floor = relative_floor(errors.iter().map(|e| e.value));
+    let mut relative: Vec<f64> =
+        errors.iter().filter(|e| e.value > floor && floor > 0.0).map(|e| e.bound / e.value).collect();
+    if relative.is_empty() {
+        return ErrorSummary::default();
+    }
+    let mean = relative.iter().sum::<f64>() / relative.len() as f64;
+    ErrorSummary { mean, median: quantile(&mut relative, 0.5), p90: quantile(&mut relative, 0.9) }
+}
+
+/// The frame's true error against a reference image's luminance.
+#[derive(Clone, Copy, Debug, Default, PartialEq, serde::Serialize)]
+pub struct TrueError {
+    /// Root-mean-square luminance difference.
+    pub rmse: f64,
+    /// Mean of (Y - Y_ref)^2 / (Y_ref^2 + floor^2) (relative MSE; floor as in the summary).
+    pub relative_mse: f64,
+    /// Fraction of pixels whose true error is within their bound.
+    pub coverage: f64,
+    /// Mean true relative error over pixels above the floor (to compare with the bound's mean).
+    pub mean_relative: f64,
+}
+
+/// The true error of `errors` against `reference` (luminance per pixel, same size).
+pub fn true_error(errors: &[PixelError], reference: &[f64]) -> TrueError {
+    let n = errors.len().max(1) as f64;
+    let floor = relative_floor(reference.iter().copied());
+    let (mut squared, mut relative, mut covered, mut relative_sum, mut above) = (0.0, 0.0, 0.0, 0.0, 0.0);
+    for (e, &r) in errors.iter().zip(reference) {
+        let difference = e.value - r;
+        squared += difference * difference;
+        relative += difference * difference / (r * r + floor * floor);
+        if difference.abs() <= e.bound {
+            covered += 1.0;
+        }
+        if r > floor {
+            relative_sum += difference.abs() / r;
+            above += 1.0;
+        }
+    }
+    TrueError {
+        rmse: (squared / n).sqrt(),
+        relative_mse: relative / n,
+        coverage: covered / n,
+        mean_relative: if above > 0.0 { relative_sum / above } else { 0.0 },
+    }
+}
+
+/// Which summary statistic `--target-error` compares.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, clap::ValueEnum, serde::Serialize)]
+#[serde(rename_all = "lowercase")]
+pub enum Statistic {
+    /// The mean relative bound.
+    Mean,
+    /// The median relative bound.
+    Median,
+    /// The 90th percentile of the relative bound.
+    P90,
+}
+
+impl ErrorSummary {
+    /// The chosen statistic.
+    pub fn get(&self, statistic: Statistic) -> f64 {
+        match statistic {
+            Statistic::Mean => self.mean,
+            Statistic::Median => self.median,
+            Statistic::P90 => self.p90,
+        }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn student_quantiles_match_tables() {
+        // t_{0.95} with 9 degrees of freedom is 1.833; the normal limit is 1.645.
+        assert!((t_quantile(0.9, 10) - 1.833).abs() < 1e-3);
+        assert!((t_quantile(0.9, 100_000) - 1.645).abs() < 1e-3);
+        assert!(t_quantile(0.9, 1).is_infinite());
+    }
+
+    #[test]
+    fn coverage_counts_pixels_within_their_bound() {
+        let errors = [0.9, 1.2, 1.05].map(|v| PixelError { value: v, bound: 0.1, ..Default::default() });
+        let t = true_error(&errors, &[1.0, 1.0, 1.0]);
+        assert!((t.coverage - 2.0 / 3.0).abs() < 1e-12);
+        assert!((t.rmse - ((0.01 + 0.04 + 0.0025) / 3.0f64).sqrt()).abs() < 1e-12);
+    }
+}
