@@ -81,6 +81,9 @@ pub struct PixelSums {
     pub xyz: DVec3,
     /// Sum of the squared luminance estimates.
     pub y_squared: f64,
+    /// Sum of the luminance estimates times the pass's white estimate `w_i` (for the variance of
+    /// the white-balanced ratio, see `crate::error`).
+    pub y_white: f64,
     /// Sum over passes of r_i^2 times the luminance of the pass's Laplacian estimate (the bias
     /// term of the error bound, see `crate::error`).
     pub laplacian_y: f64,
@@ -108,6 +111,11 @@ pub struct Film {
     pub white_xyz: DVec3,
     /// Passes summed into `white_xyz`.
     pub passes: u64,
+    /// Sum over passes of the weight `w_i` each pass's luminance gets in the image (its white
+    /// luminance estimate; 1 per pass without white balance).
+    pub white_y: f64,
+    /// Sum of the squares of the same.
+    pub white_y_squared: f64,
     /// Pixel estimates that were NaN or infinite, counted as zero.
     pub non_finite_estimates: u64,
     /// How wavelengths are weighed.
@@ -128,6 +136,8 @@ impl Film {
             pixels: vec![PixelSums::default(); (width * height) as usize],
             white_xyz: DVec3::ZERO,
             passes: 0,
+            white_y: 0.0,
+            white_y_squared: 0.0,
             non_finite_estimates: 0,
         }
     }
@@ -146,6 +156,12 @@ impl Film {
             FilmMode::Spectral => (cmf(lambda_nm) / pdf).as_dvec3(),
             FilmMode::Monochromatic { .. } => display_xyz(lambda_nm) / f64::from(d65(lambda_nm)),
         };
+        let white_y = match self.mode {
+            FilmMode::Spectral => weight.y * f64::from(d65(lambda_nm)),
+            FilmMode::Monochromatic { .. } => 1.0,
+        };
+        self.white_y += white_y;
+        self.white_y_squared += white_y * white_y;
         self.white_xyz += weight * f64::from(d65(lambda_nm));
         self.passes += 1;
         let band = (self.bins.count > 0).then(|| self.bins.band(lambda_nm));
@@ -162,6 +178,7 @@ impl Film {
             let xyz = weight * f64::from(radiance);
             sums.xyz += xyz;
             sums.y_squared += xyz.y * xyz.y;
+            sums.y_white += xyz.y * white_y;
             sums.laplacian_y += weight.y * radius2 * f64::from(laplacian);
             sums.passes += 1;
             if let Some(band) = band {
@@ -178,9 +195,13 @@ impl Film {
         d65_xyz() / (self.white_xyz / self.passes as f64)
     }
 
-    /// The luminance scale of the white balance (what `rgb` applies to Y).
-    pub fn luminance_scale(&self) -> f64 {
-        self.white_balance().y
+    /// The luminance the white illuminant should have (the white balance's target): 1 for
+    /// spectral films, and 1 per pass weight without white balance.
+    pub fn white_target_y(&self) -> f64 {
+        match self.mode {
+            FilmMode::Spectral => d65_xyz().y,
+            FilmMode::Monochromatic { .. } => 1.0,
+        }
     }
 
     /// The mean linear Rec.709 colour of every pixel.

@@ -1,0 +1,81 @@
+//! The error bound against the true error (references in tests/references/error_*.exr, made with
+//! `caustic render scenes/NAME.gltf --resolution 64x48 --passes 8192 --seed 12345`).
+
+mod common;
+
+use caustic::error::Statistic;
+use common::*;
+use serde_json::Value;
+use std::path::Path;
+
+/// Renders `scene` at 64x48 with the error log and the reference; gives the log's lines.
+fn logged_render(scene: &str, passes: u64, target: Option<f64>, dir: &Path) -> Vec<Value> {
+    let name = scene.trim_end_matches(".gltf");
+    let log = dir.join(format!("{name}.log"));
+    let mut s = settings(&bundled_scene(scene), &dir.join(name), passes);
+    s.resolution = Some([64, 48]);
+    s.seed = 7;
+    s.errors.log = Some(log.clone());
+    s.errors.reference =
+        Some(Path::new(env!("CARGO_MANIFEST_DIR")).join(format!("tests/references/error_{name}.exr")));
+    s.errors.target = target.map(|t| (t, Statistic::Mean));
+    render(&s, 2);
+    std::fs::read_to_string(&log).unwrap().lines().map(|l| serde_json::from_str(l).unwrap()).collect()
+}
+
+/// On three scenes, the fraction of pixels whose true error lies within their 90% bound is within
+/// 10 percentage points of 90% after 256, 512 and 1024 passes (pixels above 1% of the mean
+/// luminance; the references' own noise is an eighth of the variance at 1024 passes).
+#[test]
+fn the_bound_covers_the_true_error_at_its_confidence() {
+    let dir = tempfile::tempdir().unwrap();
+    for scene in ["cornell_glass.gltf", "furnace.gltf", "cornell_animated.gltf"] {
+        let lines = logged_render(scene, 1024, None, dir.path());
+        for passes in [256, 512, 1024] {
+            let line = lines.iter().find(|l| l["passes"] == passes && l.get("stopped_by").is_none()).unwrap();
+            let coverage = line["true"]["coverage"].as_f64().unwrap();
+            let ratio =
+                line["error"]["mean"].as_f64().unwrap() / line["true"]["mean_relative"].as_f64().unwrap();
+            eprintln!(
+                "{scene} at {passes} passes: coverage {coverage:.3}, mean bound / mean true error {ratio:.2}"
+            );
+            assert!((coverage - 0.9).abs() <= 0.10, "{scene} at {passes} passes: coverage {coverage:.3}");
+        }
+    }
+}
+
+/// `--target-error 0.25` (mean relative bound) stops the frame by itself, and the true mean
+/// relative error is then at or below the target.
+#[test]
+fn a_target_error_stops_the_frame_below_it() {
+    let dir = tempfile::tempdir().unwrap();
+    let lines = logged_render("cornell_glass.gltf", 100_000, Some(0.25), dir.path());
+    let last = lines.last().unwrap();
+    assert_eq!(last["stopped_by"], "target_error", "{last}");
+    let (bound, truth) =
+        (last["error"]["mean"].as_f64().unwrap(), last["true"]["mean_relative"].as_f64().unwrap());
+    eprintln!("target 0.25: stopped after {} passes, bound {bound:.3}, true {truth:.3}", last["passes"]);
+    assert!(bound <= 0.25 && truth <= 0.25, "bound {bound}, true error {truth}");
+    assert!(last["passes"].as_u64().unwrap() < 100_000);
+}
+
+/// The EXR carries the bound and the variance beside Combined, and `caustic plot` draws a log.
+#[test]
+fn error_passes_and_the_chart_are_written() {
+    let dir = tempfile::tempdir().unwrap();
+    logged_render("furnace.gltf", 8, None, dir.path());
+    let image =
+        exr::prelude::read_all_flat_layers_from_file(dir.path().join("furnace/frame_0001.exr")).unwrap();
+    let names: Vec<String> =
+        image.layer_data[0].channel_data.list.iter().map(|c| c.name.to_string()).collect();
+    assert!(names.contains(&"Error.Y".to_string()) && names.contains(&"Variance.Y".to_string()), "{names:?}");
+    let chart = dir.path().join("chart.svg");
+    let log = dir.path().join("furnace.log");
+    let output = run_caustic(&["plot", log.to_str().unwrap(), "-o", chart.to_str().unwrap()]);
+    assert!(output.status.success(), "{}", String::from_utf8_lossy(&output.stderr));
+    let svg = std::fs::read_to_string(&chart).unwrap();
+    assert!(
+        svg.contains("elapsed time (s)") && svg.contains("<polyline"),
+        "the chart lacks its axis or lines"
+    );
+}
