@@ -40,12 +40,12 @@ fn read_log(log: &Path) -> Result<Vec<Series>, String> {
     let mut series = Vec::new();
     for (frame, estimated, truth) in frames {
         series.push(Series {
-            label: format!("{name} frame {frame}: bound"),
+            label: format!("{name} frame {frame}: estimated bound"),
             points: estimated,
             dashed: false,
         });
         if !truth.is_empty() {
-            series.push(Series { label: format!("{name} frame {frame}: true"), points: truth, dashed: true });
+            series.push(Series { label: format!("{name} frame {frame}: true error (dots)"), points: truth, dashed: true });
         }
     }
     Ok(series)
@@ -73,7 +73,13 @@ pub fn plot(logs: &[PathBuf], out: &Path) -> Result<(), String> {
                 (1e-2f64..t_max * 1.2).log_scale(),
                 (e_min * 0.8..e_max * 1.25).log_scale(),
             )?;
-        chart.configure_mesh().x_desc("elapsed time (s)").y_desc("mean relative error").draw()?;
+        chart
+            .configure_mesh()
+            .x_desc("elapsed time (s)")
+            .y_desc("mean relative error")
+            .x_label_formatter(&|v| format!("{v:.3}"))
+            .y_label_formatter(&|v| format!("{v:.3}"))
+            .draw()?;
         for (i, s) in series.iter().enumerate() {
             let colour = Palette99::pick(i / 2).to_rgba();
             let style = ShapeStyle { color: colour, filled: false, stroke_width: 2 };
