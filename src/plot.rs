@@ -45,7 +45,11 @@ fn read_log(log: &Path) -> Result<Vec<Series>, String> {
             dashed: false,
         });
         if !truth.is_empty() {
-            series.push(Series { label: format!("{name} frame {frame}: true error (dots)"), points: truth, dashed: true });
+            series.push(Series {
+                label: format!("{name} frame {frame}: true error (dots)"),
+                points: truth,
+                dashed: true,
+            });
         }
     }
     Ok(series)

@@ -5,7 +5,12 @@
 
 use glam::{DVec3, Vec3};
 
-include!(concat!(env!("OUT_DIR"), "/tables.rs"));
+/// The tables as `spectra/build.rs` wrote them (generated code, digits as the sources give them).
+#[allow(clippy::excessive_precision)]
+mod baked {
+    include!(concat!(env!("OUT_DIR"), "/tables.rs"));
+}
+pub use baked::*;
 
 /// Linear interpolation in a 1 nm table starting at `LAMBDA_MIN_NM`; zero outside the range.
 fn lookup(table: &[f32], lambda_nm: f32) -> f32 {
