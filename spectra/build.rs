@@ -54,15 +54,12 @@ fn glass_catalogue(path: &Path) -> String {
 
 /// Rows of numbers from a CSV file, skipping `#` comments and the header line.
 fn read_csv(path: &Path) -> Vec<Vec<f64>> {
-    let text = fs::read_to_string(path).unwrap_or_else(|e| panic!("{}: {e}", path.display()));
-    text.lines()
-        .filter(|line| !line.starts_with('#') && !line.trim().is_empty())
-        .skip(1)
-        .map(|line| {
-            line.split(',')
-                .map(|field| {
-                    field.trim().parse().unwrap_or_else(|e| panic!("{}: {line}: {e}", path.display()))
-                })
+    read_records(path)
+        .iter()
+        .map(|fields| {
+            fields
+                .iter()
+                .map(|f| f.trim().parse().unwrap_or_else(|e| panic!("{}: {fields:?}: {e}", path.display())))
                 .collect()
         })
         .collect()

@@ -140,48 +140,38 @@ pub struct BenchArgs {
     passes: u64,
 }
 
+/// Parses `s` as a `T` that `valid` accepts, or says what was `expected`.
+fn parse_checked<T: std::str::FromStr>(
+    s: &str,
+    valid: impl Fn(&T) -> bool,
+    expected: &str,
+) -> Result<T, String> {
+    s.parse::<T>().ok().filter(|v| valid(v)).ok_or_else(|| format!("expected {expected}, got '{s}'"))
+}
+
 fn at_least_one(s: &str) -> Result<u64, String> {
-    match s.parse::<u64>() {
-        Ok(v) if v >= 1 => Ok(v),
-        _ => Err(format!("expected a whole number of at least 1, got '{s}'")),
-    }
+    parse_checked(s, |&v| v >= 1, "a whole number of at least 1")
 }
 
 fn wavelength(s: &str) -> Result<f32, String> {
-    match s.parse::<f32>() {
-        Ok(v) if (360.0..=830.0).contains(&v) => Ok(v),
-        _ => Err(format!("expected a wavelength from 360 to 830 nm, got '{s}'")),
-    }
+    parse_checked(s, |v| (360.0..=830.0).contains(v), "a wavelength from 360 to 830 nm")
 }
 
 fn spectral_bins(s: &str) -> Result<usize, String> {
-    match s.parse::<usize>() {
-        Ok(v) if v <= crate::film::MAX_SPECTRAL_BINS => Ok(v),
-        _ => {
-            Err(format!("expected a number of bands from 0 to {}, got '{s}'", crate::film::MAX_SPECTRAL_BINS))
-        }
-    }
+    let max = crate::film::MAX_SPECTRAL_BINS;
+    parse_checked(s, |&v| v <= max, &format!("a number of bands from 0 to {max}"))
 }
 
 fn thread_count(s: &str) -> Result<u64, String> {
-    match s.parse::<u64>() {
-        Ok(v) if (1..=256).contains(&v) => Ok(v),
-        _ => Err(format!("expected a whole number from 1 to 256, got '{s}'")),
-    }
+    parse_checked(s, |v| (1..=256).contains(v), "a whole number from 1 to 256")
 }
 
 fn positive_f64(s: &str) -> Result<f64, String> {
-    match s.parse::<f64>() {
-        Ok(v) if v > 0.0 && v.is_finite() => Ok(v),
-        _ => Err(format!("expected a positive number, got '{s}'")),
-    }
+    parse_checked(s, |&v: &f64| v > 0.0 && v.is_finite(), "a positive number")
 }
 
 fn non_negative_f32(s: &str) -> Result<f32, String> {
-    match s.parse::<f32>() {
-        Ok(v) if v >= 0.0 && v.is_finite() => Ok(v),
-        _ => Err(format!("expected a number >= 0, got '{s}'")),
-    }
+    parse_checked(s, |&v: &f32| v >= 0.0 && v.is_finite(), "a number >= 0")
 }
 
 /// The frames a `--frames` specification names, in order.
@@ -210,10 +200,7 @@ pub fn parse_frames(spec: &str) -> Result<FrameList, String> {
 }
 
 fn unit_interval(s: &str) -> Result<f64, String> {
-    match s.parse::<f64>() {
-        Ok(v) if v > 0.0 && v < 1.0 => Ok(v),
-        _ => Err(format!("expected a number strictly between 0 and 1, got '{s}'")),
-    }
+    parse_checked(s, |&v: &f64| v > 0.0 && v < 1.0, "a number strictly between 0 and 1")
 }
 
 fn parse_resolution(s: &str) -> Result<[u32; 2], String> {
