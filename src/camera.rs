@@ -8,7 +8,19 @@
 use glam::{Mat4, Vec2, Vec3};
 
 use crate::sampling::{square_to_disc, square_to_triangle};
-use crate::scene::description::Lens;
+
+/// The thin lens of a camera (DESIGN.md: aperture radius = focal length / (2 f-stop), as Cycles).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Lens {
+    /// Aperture radius in scene units (zero: a pinhole).
+    pub aperture_radius: f32,
+    /// Distance to the plane in focus, scene units.
+    pub focus_distance: f32,
+    /// Polygonal aperture blades (0 or fewer than 3: a round aperture).
+    pub blades: u32,
+    /// Rotation of the blades, radians.
+    pub blade_rotation: f32,
+}
 
 /// A perspective camera in world space.
 #[derive(Clone, Copy, Debug)]

@@ -7,6 +7,7 @@ use glam::{Vec2, Vec3};
 
 use super::animation::Rig;
 use super::TriangleRef;
+pub use crate::camera::Lens;
 use crate::geometry::Cone;
 use crate::lights::World;
 use crate::materials::Material;
@@ -47,19 +48,6 @@ pub struct PunctualLight {
     pub node: usize,
     /// What it emits.
     pub kind: PunctualKind,
-}
-
-/// The thin lens of a camera (DESIGN.md: aperture radius = focal length / (2 f-stop), as Cycles).
-#[derive(Clone, Copy, Debug, PartialEq)]
-pub struct Lens {
-    /// Aperture radius in scene units (zero: a pinhole).
-    pub aperture_radius: f32,
-    /// Distance to the plane in focus, scene units.
-    pub focus_distance: f32,
-    /// Polygonal aperture blades (0 or fewer than 3: a round aperture).
-    pub blades: u32,
-    /// Rotation of the blades, radians.
-    pub blade_rotation: f32,
 }
 
 /// The camera on its node.

@@ -4,8 +4,7 @@
 
 use glam::Vec3;
 
-use super::visible::VisiblePoint;
-use super::{PassStats, Renderer};
+use super::{PassStats, Renderer, VisiblePoint};
 use crate::geometry::offset_origin;
 use crate::materials::{ShadingFrame, Transport};
 use crate::sampling::Sampler;

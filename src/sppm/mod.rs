@@ -12,6 +12,8 @@ pub mod radius;
 mod visible;
 
 use glam::Vec3;
+
+use crate::materials::{Bsdf, ShadingFrame};
 use rayon::prelude::*;
 
 use crate::accel::Accel;
@@ -21,10 +23,24 @@ use crate::scene::Scene;
 use crate::spectrum::sample_visible_wavelength;
 
 pub use photons::Photon;
-pub use visible::VisiblePoint;
 
 /// Longest path (bounces) an eye path follows through delta surfaces, and a photon overall.
 pub const MAX_DEPTH: u32 = 32;
+
+/// Where a pixel's camera path met its first non-delta surface.
+#[derive(Clone, Copy, Debug)]
+pub struct VisiblePoint {
+    /// Position.
+    pub p: Vec3,
+    /// Normals there.
+    pub frame: ShadingFrame,
+    /// Unit direction back along the path.
+    pub wo: Vec3,
+    /// The BSDF at the pass wavelength.
+    pub bsdf: Bsdf,
+    /// Path throughput from the camera to here.
+    pub beta: f32,
+}
 
 /// Settings of the SPPM passes.
 #[derive(Clone, Debug)]

@@ -2,28 +2,13 @@
 //! first non-delta surface, where direct light is estimated by next-event estimation and a
 //! visible point is left for the photons to be gathered at (direct light: [`DirectLight`]).
 
-use glam::{Vec2, Vec3};
+use glam::Vec2;
 
 use super::direct::DirectLight;
-use super::{PassSamples, PassStats, Renderer, MAX_DEPTH};
+use super::{PassSamples, PassStats, Renderer, VisiblePoint, MAX_DEPTH};
 use crate::geometry::offset_origin;
-use crate::materials::{Bsdf, ShadingFrame, Transport};
+use crate::materials::{Bsdf, Transport};
 use crate::sampling::{stream, Stream};
-
-/// Where a pixel's camera path met its first non-delta surface.
-#[derive(Clone, Copy, Debug)]
-pub struct VisiblePoint {
-    /// Position.
-    pub p: Vec3,
-    /// Normals there.
-    pub frame: ShadingFrame,
-    /// Unit direction back along the path.
-    pub wo: Vec3,
-    /// The BSDF at the pass wavelength.
-    pub bsdf: Bsdf,
-    /// Path throughput from the camera to here.
-    pub beta: f32,
-}
 
 /// A pixel's eye path: the radiance found along it, and its visible point if it has one.
 #[derive(Clone, Copy, Debug)]
