@@ -3,15 +3,18 @@
 //! Data flows one way, one module per stage:
 //!
 //! ```text
-//! glTF + extras --scene--> Scene --accel--> BVH
-//!                            |                |
-//!        spectrum, sampling, materials, lights, camera (leaf modules)
-//!                            v                v
-//!                 sppm::Renderer::run_pass(i) -> per-pixel estimates at lambda_i
-//!                            v
-//!                 film::Film (sums over passes) -> frame_NNNN.exr
-//!                            ^
-//!        frames (drives passes and frames) <- cli (arguments) / bench
+//! glTF + extras --scene--> Description --pose--> Prepared (fixed part, once per frame range)
+//!                                                    | pose(time) per pass when things move
+//!                                                    v
+//!        spectrum, sampling, geometry,          Scene --accel--> BVHs (fixed + moving)
+//!        materials, lights, camera (leaves)          |
+//!                                                    v
+//!                 sppm::Renderer::run_pass(i) -> per-pixel estimates at lambda_i, time_i
+//!                                                    v
+//!                 film::Film (sums over passes) -> error (bounds) -> monitor (log, stop)
+//!                                                    v
+//!        frames (drives frames and passes, writes frame_NNNN.exr) <- cli / info / bench
+//!        plot (reads --log files), progress (bar or JSON lines)
 //! ```
 #![warn(missing_docs)]
 
