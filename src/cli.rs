@@ -257,14 +257,6 @@ pub fn run(cli: Cli) -> Result<(), String> {
             let settings = args.settings();
             let report = thread_pool(args.threads)?.install(|| frames::render(&settings))?;
             if settings.progress != ProgressStyle::Json {
-                for frame in &report.frames {
-                    eprintln!(
-                        "caustic: wrote {} ({} passes, {:.1} s)",
-                        frame.path.display(),
-                        frame.passes,
-                        frame.elapsed_s
-                    );
-                }
                 if !report.skipped.is_empty() {
                     eprintln!("caustic: skipped {} frames already rendered (--resume)", report.skipped.len());
                 }

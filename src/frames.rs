@@ -294,6 +294,11 @@ pub fn render(settings: &RenderSettings) -> Result<RenderReport, String> {
         let bound = run.errors.iter().map(|e| e.bound as f32).collect();
         let variance = run.errors.iter().map(|e| e.variance as f32).collect();
         film.write_exr(&path, &[("Error.Y", bound), ("Variance.Y", variance)])?;
+        let stop = serde_json::to_value(run.stopped_by)
+            .ok()
+            .and_then(|v| v.as_str().map(String::from))
+            .unwrap_or_default();
+        Progress::new(settings.progress, frame, None).written(&path, film.passes, run.elapsed_s, &stop);
         let error = summarize(&run.errors);
         let (passes, elapsed_s, stats, stopped_by) = (film.passes, run.elapsed_s, run.stats, run.stopped_by);
         report.frames.push(FrameReport { frame, path, film, passes, elapsed_s, stats, stopped_by, error });

@@ -85,9 +85,13 @@ fn json_progress_reports_every_pass() {
         "json",
     ]);
     assert!(output.status.success(), "{}", stderr(&output));
-    let lines: Vec<serde_json::Value> =
+    let all: Vec<serde_json::Value> =
         String::from_utf8(output.stdout).unwrap().lines().map(|l| serde_json::from_str(l).unwrap()).collect();
+    let (lines, written): (Vec<_>, Vec<_>) = all.into_iter().partition(|l| l.get("written").is_none());
     assert_eq!(lines.len(), 3);
+    assert_eq!(written.len(), 1);
+    assert!(written[0]["written"].as_str().unwrap().ends_with("frame_0001.exr"));
+    assert_eq!(written[0]["stopped_by"], "passes");
     for (k, line) in lines.iter().enumerate() {
         assert_eq!(line["frame"], 1);
         assert_eq!(line["pass"], k as u64 + 1);
