@@ -294,11 +294,14 @@ pub fn render(settings: &RenderSettings) -> Result<RenderReport, String> {
         let bound = run.errors.iter().map(|e| e.bound as f32).collect();
         let variance = run.errors.iter().map(|e| e.variance as f32).collect();
         film.write_exr(&path, &[("Error.Y", bound), ("Variance.Y", variance)])?;
-        let stop = serde_json::to_value(run.stopped_by)
-            .ok()
-            .and_then(|v| v.as_str().map(String::from))
-            .unwrap_or_default();
-        Progress::new(settings.progress, frame, None).written(&path, film.passes, run.elapsed_s, &stop);
+        Progress::written(
+            settings.progress,
+            frame,
+            &path,
+            film.passes,
+            run.elapsed_s,
+            run.stopped_by.as_str(),
+        );
         let error = summarize(&run.errors);
         let (passes, elapsed_s, stats, stopped_by) = (film.passes, run.elapsed_s, run.stats, run.stopped_by);
         report.frames.push(FrameReport { frame, path, film, passes, elapsed_s, stats, stopped_by, error });
@@ -338,18 +341,23 @@ fn run_passes(shot: &Shot, settings: &RenderSettings, frame: i32) -> Result<Fram
         poses += 1;
         shot.pose(shot.pass_time(frame, 0))
     });
+    // A scene that stays put for the whole frame gets one renderer (its light choice is built
+    // once, not per pass).
+    let fixed_renderer = match (&shot.still, &frame_pose) {
+        (Some((scene, accel)), _) | (None, Some((scene, accel))) => {
+            Some(Renderer::new(scene, accel, s.clone()))
+        }
+        (None, None) => None,
+    };
     loop {
-        let posed;
-        let (scene, accel) = match (&shot.still, &frame_pose) {
-            (Some((scene, accel)), _) | (None, Some((scene, accel))) => (scene, accel),
-            (None, None) => {
-                posed = shot.pose(shot.pass_time(frame, pass));
+        let (samples, estimates, pass_stats) = match &fixed_renderer {
+            Some(renderer) => renderer.run_pass(pass),
+            None => {
+                let (scene, accel) = shot.pose(shot.pass_time(frame, pass));
                 poses += 1;
-                (&posed.0, &posed.1)
+                Renderer::new(&scene, &accel, s.clone()).run_pass(pass)
             }
         };
-        let renderer = Renderer::new(scene, accel, shot.sppm.clone());
-        let (samples, estimates, pass_stats) = renderer.run_pass(pass);
         film.add_pass(
             samples.lambda_nm,
             samples.lambda_pdf,

@@ -43,6 +43,17 @@ pub enum StopReason {
     TargetError,
 }
 
+impl StopReason {
+    /// The name used in logs and progress lines.
+    pub fn as_str(self) -> &'static str {
+        match self {
+            StopReason::Passes => "passes",
+            StopReason::TimeBudget => "time_budget",
+            StopReason::TargetError => "target_error",
+        }
+    }
+}
+
 /// Reads the luminance (Rec.709 weights of `Combined.R/G/B`, or `R/G/B`) of an EXR.
 pub fn read_luminance(path: &Path) -> Result<(usize, usize, Vec<f64>), String> {
     use exr::prelude::read_all_flat_layers_from_file;

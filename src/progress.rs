@@ -59,11 +59,18 @@ impl Progress {
 
     /// Tells that the frame's EXR is written: a line on stderr, or a JSON line on stdout
     /// (`{"frame", "written", "passes", "elapsed_s", "stopped_by"}`) that the add-on can load at once.
-    pub fn written(&self, path: &std::path::Path, passes: u64, elapsed_s: f64, stopped_by: &str) {
-        match self.style {
+    pub fn written(
+        style: ProgressStyle,
+        frame: i32,
+        path: &std::path::Path,
+        passes: u64,
+        elapsed_s: f64,
+        stopped_by: &str,
+    ) {
+        match style {
             ProgressStyle::Json => println!(
                 "{}",
-                serde_json::json!({"frame": self.frame, "written": path.display().to_string(), "passes": passes,
+                serde_json::json!({"frame": frame, "written": path.display().to_string(), "passes": passes,
                     "elapsed_s": elapsed_s, "stopped_by": stopped_by})
             ),
             _ => eprintln!("caustic: wrote {} ({passes} passes, {elapsed_s:.1} s)", path.display()),
