@@ -9,7 +9,12 @@ Writes scenes/<name>.gltf and scenes/<name>.bin:
   the sphere focuses a caustic onto the floor);
 - furnace: a closed cube whose walls are diffuse (albedo 0.5) and emit radiance 1, seen from
   inside (the analytic answer is Le / (1 - a) = 2 everywhere);
-- spot_glass: a spot light shining through a glass sphere onto a diffuse floor.
+- spot_glass: a spot light shining through a glass sphere onto a diffuse floor;
+- cornell_animated: the demo box over 24 frames with a rolling sphere, a dolly, motion blur and
+  depth of field;
+- shot / shot_moving_camera: the demo box over 24 frames with its glass sphere standing still and
+  a small cube sliding across the floor, seen from a still camera (or a dollying one): the shot
+  that reuse across frames is measured on (`caustic bench --frames`).
 
 Blender's exporter drops area lights and the render resolution, so they travel as `caustic`
 custom properties, which the exporter writes as glTF extras (see docs/extras.md).
@@ -195,7 +200,45 @@ def make_cornell_animated():
     export("cornell_animated", animated=True)
 
 
+def make_shot(moving_camera):
+    """The demo box over 24 frames: the glass sphere and its caustic stand still while a small
+    cube slides across the floor behind it, with a half-frame shutter; the camera stands still
+    (or dollies in, for `shot_moving_camera`)."""
+    reset()
+    scene = bpy.context.scene
+    scene.frame_start, scene.frame_end = 1, 24
+    scene.render.fps = 24
+    white = material("White", (0.75, 0.75, 0.75))
+    red = material("Red", (0.63, 0.065, 0.05))
+    green = material("Green", (0.14, 0.45, 0.091))
+    yellow = material("Yellow", (0.8, 0.6, 0.1))
+    glass = material("Glass", (1.0, 1.0, 1.0), roughness=0.0, transmission=1.0, ior=1.5)
+    cornell_box(white, red, green)
+    glass_sphere((0.3, -0.3, 0.55), 0.35, glass)
+    bpy.ops.mesh.primitive_cube_add(size=0.2, location=(-0.7, 0.3, 0.1))
+    cube = bpy.context.object
+    cube.name = "SlidingCube"
+    cube.data.materials.append(yellow)
+    for frame, x in [(1, -0.7), (24, 0.0)]:
+        cube.location.x = x
+        cube.keyframe_insert("location", index=0, frame=frame)
+    area_light("CeilingLight", (-0.3, 0.4, 1.98), 0.2, 25.0)
+    cam = camera((0, -3.9, 1.0), (0, 0, 1.0))
+    if moving_camera:
+        for frame, y in [(1, -3.9), (24, -3.5)]:
+            cam.location.y = y
+            cam.keyframe_insert("location", index=1, frame=frame)
+    scene.render.use_motion_blur = True
+    scene.render.motion_blur_shutter = 0.5
+    set_resolution(320, 240)
+    scene["caustic"] = {"resolution": [320, 240], "fps": 24.0,
+                        "shutter": {"length_frames": 0.5, "position": "CENTER"}}
+    export("shot_moving_camera" if moving_camera else "shot", animated=True)
+
+
 if __name__ == "__main__":
+    make_shot(moving_camera=False)
+    make_shot(moving_camera=True)
     make_cornell_animated()
     make_cornell_glass()
     make_furnace()

@@ -65,7 +65,18 @@ impl Accel {
 
     /// Whether anything lies on the ray from `origin` in the unit `direction` before `t_max`.
     pub fn occluded(&self, origin: Vec3, direction: Vec3, t_max: f32) -> bool {
-        self.fixed.occluded(origin, direction, t_max) || self.moving.occluded(origin, direction, t_max)
+        self.fixed.occluded(origin, direction, t_max) || self.moving_occluded(origin, direction, t_max)
+    }
+
+    /// Whether a moving triangle lies on the ray before `t_max` (the fixed part is not tested).
+    pub fn moving_occluded(&self, origin: Vec3, direction: Vec3, t_max: f32) -> bool {
+        self.moving.occluded(origin, direction, t_max)
+    }
+
+    /// The box around the moving triangles, or `None` when nothing moves.
+    pub fn moving_bounds(&self) -> Option<(Vec3, Vec3)> {
+        let corners = self.moving.triangles.iter().flat_map(|t| [t.v0, t.v1, t.v2]).map(Vec3::from);
+        corners.map(|p| (p, p)).reduce(|(a, b), (c, d)| (a.min(c), b.max(d)))
     }
 }
 

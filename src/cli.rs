@@ -125,6 +125,14 @@ pub struct RenderArgs {
     /// The statistic --target-error compares: mean, median or p90 of the relative bound.
     #[arg(long, value_enum, default_value_t = Statistic::Mean)]
     target_statistic: Statistic,
+    /// Render each frame on its own instead of sharing paths on static geometry between frames
+    /// rendered together (the same images in expectation; for comparison, and as a fallback).
+    #[arg(long)]
+    no_reuse: bool,
+    /// Memory for the frames rendered together, e.g. 4G, 512M or bytes (default 4G): it sets how
+    /// many frames share each pass.
+    #[arg(long, value_name = "SIZE", value_parser = memory_size, default_value = "4G")]
+    memory_budget: u64,
 }
 
 /// Flags of `caustic bench`.
@@ -164,6 +172,20 @@ fn spectral_bins(s: &str) -> Result<usize, String> {
 
 fn thread_count(s: &str) -> Result<u64, String> {
     parse_checked(s, |v| (1..=256).contains(v), "a whole number from 1 to 256")
+}
+
+/// A size in bytes: a whole number with an optional K, M, G or T (powers of 1024).
+fn memory_size(s: &str) -> Result<u64, String> {
+    let expected = "a size like 4G, 512M or a number of bytes";
+    let (digits, shift) = match s.trim().to_ascii_uppercase().strip_suffix('B').unwrap_or(s.trim()) {
+        t if t.ends_with(['K', 'k']) => (t[..t.len() - 1].to_string(), 10),
+        t if t.ends_with(['M', 'm']) => (t[..t.len() - 1].to_string(), 20),
+        t if t.ends_with(['G', 'g']) => (t[..t.len() - 1].to_string(), 30),
+        t if t.ends_with(['T', 't']) => (t[..t.len() - 1].to_string(), 40),
+        t => (t.to_string(), 0),
+    };
+    let value: u64 = parse_checked(&digits, |&v: &u64| v >= 1, expected).map_err(|_| format!("expected {expected}, got '{s}'"))?;
+    value.checked_mul(1 << shift).ok_or_else(|| format!("'{s}' is too large"))
 }
 
 fn positive_f64(s: &str) -> Result<f64, String> {
@@ -238,6 +260,8 @@ impl RenderArgs {
                 reference: self.reference.clone(),
                 target: self.target_error.map(|e| (e, self.target_statistic)),
             },
+            reuse: !self.no_reuse,
+            memory_budget: self.memory_budget,
         }
     }
 }

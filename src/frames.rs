@@ -10,7 +10,7 @@ use std::sync::Arc;
 use std::time::Instant;
 
 use crate::accel::{Accel, Bvh};
-use crate::error::{summarize, ErrorSummary, PixelError};
+use crate::error::{summarize, ErrorSummary};
 use crate::film::{Film, FilmMode};
 use crate::monitor::{ErrorSettings, Monitor, StopReason};
 use crate::progress::Progress;
@@ -19,10 +19,13 @@ use crate::sampling::pass_time_sample;
 use crate::scene::description::{LensSettings, Shutter};
 use crate::scene::pose::lens;
 use crate::scene::{Description, Prepared, Scene, TimeRange};
-use crate::sppm::{PassStats, Renderer, SppmSettings};
+use crate::sppm::{run_shared_pass, PassSamples, PassStats, PixelEstimate, Renderer, SppmSettings};
 
 /// Passes when neither a pass count nor a time budget is given.
 pub const DEFAULT_PASSES: u64 = 64;
+
+/// Memory for the frames rendered together when `--memory-budget` is not given: 4 GiB.
+pub const DEFAULT_MEMORY_BUDGET: u64 = 4 << 30;
 
 /// Blender's default focus distance, used when an f-stop is given without one.
 pub const DEFAULT_FOCUS_DISTANCE: f32 = 10.0;
@@ -66,6 +69,10 @@ pub struct RenderSettings {
     pub focus_distance: Option<f32>,
     /// Error bound, log, reference and target.
     pub errors: ErrorSettings,
+    /// Share paths between frames rendered together (`--no-reuse` turns it off).
+    pub reuse: bool,
+    /// Memory for the frames rendered together, in bytes.
+    pub memory_budget: u64,
 }
 
 impl RenderSettings {
@@ -90,6 +97,8 @@ impl RenderSettings {
             fstop: None,
             focus_distance: None,
             errors: ErrorSettings::default(),
+            reuse: true,
+            memory_budget: DEFAULT_MEMORY_BUDGET,
         }
     }
 }
@@ -126,6 +135,10 @@ pub struct RenderReport {
     pub fixed_bvh_builds: u64,
     /// Scenes posed at a pass time (zero when nothing moves: one pose serves all).
     pub poses: u64,
+    /// Frames rendered together in a block (pass-major).
+    pub block_frames: usize,
+    /// Work done once per pass for a whole block (paths shared between its frames).
+    pub shared_stats: PassStats,
 }
 
 /// Image size: the flag, else the scene's extras, else 640 wide at the camera's aspect ratio.
@@ -263,6 +276,24 @@ impl Shot {
         (scene, accel)
     }
 
+    /// The fixed part's BVH alone (what paths shared between frames are traced against).
+    fn fixed_accel(&self) -> Accel {
+        Accel::new(Arc::clone(&self.fixed_bvh), &[])
+    }
+
+    /// The pose `frame` renders pass `pass` in (its `own` when it has one for all its passes);
+    /// counts the poses made.
+    fn posed<'a>(&'a self, frame: i32, own: &'a Option<(Scene, Accel)>, pass: u64, poses: &mut u64) -> Posed<'a> {
+        match (&self.still, own) {
+            (Some((scene, accel)), _) | (None, Some((scene, accel))) => Posed::Borrowed(scene, accel),
+            (None, None) => {
+                *poses += 1;
+                let (scene, accel) = self.pose(self.pass_time(frame, pass));
+                Posed::Owned(scene, accel)
+            }
+        }
+    }
+
     /// The time of pass `index` of `frame`: one point of the shutter, the same for every frame.
     fn pass_time(&self, frame: i32, index: u64) -> f32 {
         let offset = self.shutter.open + pass_time_sample(self.sppm.seed, index) * self.shutter.length;
@@ -271,117 +302,228 @@ impl Shot {
 }
 
 /// Renders every frame of `settings.frames` and writes `OUT/frame_####.exr` for each.
+///
+/// Frames are rendered pass-major in blocks (DESIGN.md, "Frames, and reuse across frames"): every
+/// frame of a block renders pass 0, then pass 1, and so on, sharing the paths that the static part
+/// of the scene makes alike. The block is as long as the memory budget allows.
 pub fn render(settings: &RenderSettings) -> Result<RenderReport, String> {
     let shot = Shot::new(settings, load_description(settings)?)?;
     std::fs::create_dir_all(&settings.out_dir)
         .map_err(|e| format!("cannot create output folder {}: {e}", settings.out_dir.display()))?;
     let mut report = RenderReport { fixed_bvh_builds: 1, ..Default::default() };
-    for &frame in &settings.frames {
-        let path = frame_path(&settings.out_dir, frame);
-        if settings.resume && path.exists() {
-            report.skipped.push(frame);
-            continue;
-        }
-        let run = run_passes(&shot, settings, frame)?;
-        report.poses += run.poses;
-        let film = run.film;
-        if film.non_finite_estimates > 0 {
-            eprintln!(
-                "caustic: warning: frame {frame}: {} pixel estimates were NaN or infinite and counted as zero (please report this scene)",
-                film.non_finite_estimates
-            );
-        }
-        let bound = run.errors.iter().map(|e| e.bound as f32).collect();
-        let variance = run.errors.iter().map(|e| e.variance as f32).collect();
-        film.write_exr(&path, &[("Error.Y", bound), ("Variance.Y", variance)])?;
-        Progress::written(
-            settings.progress,
-            frame,
-            &path,
-            film.passes,
-            run.elapsed_s,
-            run.stopped_by.as_str(),
-        );
-        let error = summarize(&run.errors);
-        let (passes, elapsed_s, stats, stopped_by) = (film.passes, run.elapsed_s, run.stats, run.stopped_by);
-        report.frames.push(FrameReport { frame, path, film, passes, elapsed_s, stats, stopped_by, error });
+    let (skipped, todo): (Vec<i32>, Vec<i32>) =
+        settings.frames.iter().partition(|&&f| settings.resume && frame_path(&settings.out_dir, f).exists());
+    report.skipped = skipped;
+    report.block_frames = shot.block_frames(settings, todo.len());
+    for block in todo.chunks(report.block_frames.max(1)) {
+        render_block(&shot, settings, block, &mut report)?;
     }
     Ok(report)
 }
 
-/// What a frame's passes produced.
-struct FrameRun {
-    film: Film,
-    errors: Vec<PixelError>,
-    elapsed_s: f64,
-    stats: PassStats,
-    poses: u64,
-    stopped_by: StopReason,
+impl Shot {
+    /// Whether a block of `frames` frames shares paths: reuse is on, there is more than one
+    /// frame and there are static triangles to share.
+    fn shares(&self, settings: &RenderSettings, frames: usize) -> bool {
+        settings.reuse && frames > 1 && self.prepared.triangle_counts().0 > 0
+    }
+
+    /// How many frames render together: as many as the memory budget holds beside what one
+    /// pass needs, at least one; one when reuse is off.
+    fn block_frames(&self, settings: &RenderSettings, frames: usize) -> usize {
+        if !self.shares(settings, frames) {
+            return 1;
+        }
+        let pixels = u64::from(self.sppm.width) * u64::from(self.sppm.height);
+        let per_frame = pixels * (FRAME_BYTES_PER_PIXEL + 8 * settings.spectral_bins as u64);
+        let photons = self.sppm.photons_per_pass as u64 * PHOTON_BYTES_PER_PATH;
+        let shared = pixels * BYTES_PER_PIXEL + photons;
+        let fit = settings.memory_budget.saturating_sub(shared) / per_frame.max(1);
+        (fit as usize).clamp(1, frames)
+    }
 }
 
-/// Runs passes 0, 1, ... of `frame` until the pass count, the time budget or the target error.
-fn run_passes(shot: &Shot, settings: &RenderSettings, frame: i32) -> Result<FrameRun, String> {
+/// What a frame keeps while its block renders: its sums, its error monitor, its work counts.
+const FRAME_BYTES_PER_PIXEL: u64 = 96;
+
+/// What one pass holds per photon path (its photons and the segments frames check), generously.
+const PHOTON_BYTES_PER_PATH: u64 = 256;
+
+/// A frame while its block renders.
+struct FrameInProgress {
+    frame: i32,
+    film: Film,
+    monitor: Monitor,
+    stats: PassStats,
+    /// Its share of the block's wall-clock time.
+    elapsed_s: f64,
+}
+
+/// A pose to render a pass in: the shot's still one, a frame's own, or one made for the pass.
+enum Posed<'a> {
+    Borrowed(&'a Scene, &'a Accel),
+    Owned(Scene, Accel),
+}
+
+impl Posed<'_> {
+    fn parts(&self) -> (&Scene, &Accel) {
+        match self {
+            Posed::Borrowed(scene, accel) => (scene, accel),
+            Posed::Owned(scene, accel) => (scene, accel),
+        }
+    }
+}
+
+/// The passes a frame renders at most: `--passes`, else none when a time budget or a target
+/// error ends it, else the default.
+fn pass_limit(settings: &RenderSettings) -> Option<u64> {
+    let open_ended = settings.time_budget_s.is_some() || settings.errors.target.is_some();
+    settings.passes.or((!open_ended).then_some(DEFAULT_PASSES))
+}
+
+/// Renders `frames` pass-major until each is stopped, writing each as it stops.
+fn render_block(
+    shot: &Shot,
+    settings: &RenderSettings,
+    frames: &[i32],
+    report: &mut RenderReport,
+) -> Result<(), String> {
     let s = &shot.sppm;
     let mode = match s.fixed_wavelength_nm {
         Some(lambda_nm) => FilmMode::Monochromatic { lambda_nm },
         None => FilmMode::Spectral,
     };
-    let mut film = Film::new(s.width, s.height, mode, settings.spectral_bins);
-    let mut monitor = Monitor::new(&settings.errors, frame, s.width, s.height)?;
-    let limit = settings.passes.or(if settings.time_budget_s.is_some() || settings.errors.target.is_some() {
-        None
-    } else {
-        Some(DEFAULT_PASSES)
-    });
-    let progress = Progress::new(settings.progress, frame, limit);
-    let start = Instant::now();
-    let (mut stats, mut poses, mut pass) = (PassStats::default(), 0, 0);
-    // Without a shutter every pass of a frame sees the same instant: pose it once.
-    let frame_pose = (shot.still.is_none() && shot.shutter.length == 0.0).then(|| {
-        poses += 1;
-        shot.pose(shot.pass_time(frame, 0))
-    });
-    // A scene that stays put for the whole frame gets one renderer (its light choice is built
-    // once, not per pass).
-    let fixed_renderer = match (&shot.still, &frame_pose) {
-        (Some((scene, accel)), _) | (None, Some((scene, accel))) => {
-            Some(Renderer::new(scene, accel, s.clone()))
-        }
-        (None, None) => None,
-    };
-    loop {
-        let (samples, estimates, pass_stats) = match &fixed_renderer {
-            Some(renderer) => renderer.run_pass(pass),
-            None => {
-                let (scene, accel) = shot.pose(shot.pass_time(frame, pass));
-                poses += 1;
-                Renderer::new(&scene, &accel, s.clone()).run_pass(pass)
-            }
-        };
-        film.add_pass(
-            samples.lambda_nm,
-            samples.lambda_pdf,
-            samples.radius,
-            estimates.iter().map(|e| (e.radiance, e.laplacian)),
-        );
-        stats = stats + pass_stats;
-        pass += 1;
-        let elapsed = start.elapsed().as_secs_f64();
-        progress.update(pass, elapsed);
-        let photons = pass * s.photons_per_pass as u64;
-        let stopped_by = if monitor.after_pass(&film, elapsed, photons)? {
-            Some(StopReason::TargetError)
-        } else if settings.time_budget_s.is_some_and(|budget| elapsed >= budget) {
-            Some(StopReason::TimeBudget)
-        } else if limit.is_some_and(|n| pass >= n) {
-            Some(StopReason::Passes)
-        } else {
-            None
-        };
-        if let Some(stopped_by) = stopped_by {
-            progress.finish();
-            let errors = monitor.finish(&film, elapsed, photons, stopped_by)?;
-            return Ok(FrameRun { film, errors, elapsed_s: elapsed, stats, poses, stopped_by });
-        }
+    let (mut active, mut own_poses) = (Vec::new(), Vec::new());
+    for &frame in frames {
+        let film = Film::new(s.width, s.height, mode, settings.spectral_bins);
+        let monitor = Monitor::new(&settings.errors, frame, s.width, s.height)?;
+        active.push(FrameInProgress { frame, film, monitor, stats: PassStats::default(), elapsed_s: 0.0 });
+        // Without a shutter every pass of a frame sees the same instant: pose it once.
+        own_poses.push((shot.still.is_none() && shot.shutter.length == 0.0).then(|| {
+            report.poses += 1;
+            shot.pose(shot.pass_time(frame, 0))
+        }));
     }
+    let limit = pass_limit(settings);
+    let progress = Progress::new(settings.progress, frames, limit);
+    let share = shot.shares(settings, frames.len());
+    let mut pass = 0;
+    while !active.is_empty() {
+        let start = Instant::now();
+        let samples = s.pass_samples(pass);
+        let poses: Vec<Posed> =
+            active.iter().zip(&own_poses).map(|(f, own)| shot.posed(f.frame, own, pass, &mut report.poses)).collect();
+        if share {
+            report.shared_stats = report.shared_stats + shared_pass(shot, &poses, &samples, &mut active);
+        } else {
+            for (frame, posed) in active.iter_mut().zip(&poses) {
+                let (scene, accel) = posed.parts();
+                let (_, estimates, stats) = Renderer::new(scene, accel, s.clone()).run_pass(pass);
+                add_pass(frame, &samples, &estimates, stats);
+            }
+        }
+        drop(poses);
+        let elapsed_share = start.elapsed().as_secs_f64() / active.len() as f64;
+        pass += 1;
+        for frame in &mut active {
+            frame.elapsed_s += elapsed_share;
+        }
+        let rendered: Vec<i32> = active.iter().map(|f| f.frame).collect();
+        progress.update(&rendered, pass, active[0].elapsed_s);
+        let photons = pass * s.photons_per_pass as u64;
+        let (mut still_running, mut their_poses) = (Vec::new(), Vec::new());
+        for (mut frame, own) in active.into_iter().zip(own_poses) {
+            match stop_reason(settings, &mut frame, photons, limit)? {
+                Some(stopped_by) => finish_frame(settings, frame, photons, stopped_by, report)?,
+                None => {
+                    still_running.push(frame);
+                    their_poses.push(own);
+                }
+            }
+        }
+        (active, own_poses) = (still_running, their_poses);
+    }
+    progress.finish();
+    Ok(())
+}
+
+/// Runs pass `samples.index` for every active frame at once, sharing paths between them; gives
+/// the work done once.
+fn shared_pass(shot: &Shot, poses: &[Posed], samples: &PassSamples, active: &mut [FrameInProgress]) -> PassStats {
+    let s = &shot.sppm;
+    let (first_scene, _) = poses[0].parts();
+    let fixed_accel = shot.fixed_accel();
+    let statics = Renderer::new(first_scene, &fixed_accel, s.clone());
+    let renderers: Vec<Renderer> = poses
+        .iter()
+        .map(|p| {
+            let (scene, accel) = p.parts();
+            Renderer::choosing_lights_as(&statics, scene, accel)
+        })
+        .collect();
+    let share_eyes = !shot.prepared.camera_moves() && !shot.prepared.lights_move();
+    run_shared_pass(&statics, &renderers, samples, share_eyes, |out| {
+        add_pass(&mut active[out.frame], samples, &out.estimates, out.stats);
+    })
+}
+
+/// Adds one pass's estimates to a frame.
+fn add_pass(frame: &mut FrameInProgress, samples: &PassSamples, estimates: &[PixelEstimate], stats: PassStats) {
+    let sums = estimates.iter().map(|e| (e.radiance, e.laplacian));
+    frame.film.add_pass(samples.lambda_nm, samples.lambda_pdf, samples.radius, sums);
+    frame.stats = frame.stats + stats;
+}
+
+/// What stops `frame` after `photons` photon paths, if anything: its target error, its time
+/// budget or the pass count.
+fn stop_reason(
+    settings: &RenderSettings,
+    frame: &mut FrameInProgress,
+    photons: u64,
+    limit: Option<u64>,
+) -> Result<Option<StopReason>, String> {
+    let passes = frame.film.passes;
+    Ok(if frame.monitor.after_pass(&frame.film, frame.elapsed_s, photons)? {
+        Some(StopReason::TargetError)
+    } else if settings.time_budget_s.is_some_and(|budget| frame.elapsed_s >= budget) {
+        Some(StopReason::TimeBudget)
+    } else if limit.is_some_and(|n| passes >= n) {
+        Some(StopReason::Passes)
+    } else {
+        None
+    })
+}
+
+/// Writes a stopped frame's EXR (with its error passes, after `photons` photon paths), announces it and reports it.
+fn finish_frame(
+    settings: &RenderSettings,
+    mut frame: FrameInProgress,
+    photons: u64,
+    stopped_by: StopReason,
+    report: &mut RenderReport,
+) -> Result<(), String> {
+    let film = frame.film;
+    let errors = frame.monitor.finish(&film, frame.elapsed_s, photons, stopped_by)?;
+    if film.non_finite_estimates > 0 {
+        eprintln!(
+            "caustic: warning: frame {}: {} pixel estimates were NaN or infinite and counted as zero (please report this scene)",
+            frame.frame, film.non_finite_estimates
+        );
+    }
+    let path = frame_path(&settings.out_dir, frame.frame);
+    let bound = errors.iter().map(|e| e.bound as f32).collect();
+    let variance = errors.iter().map(|e| e.variance as f32).collect();
+    film.write_exr(&path, &[("Error.Y", bound), ("Variance.Y", variance)])?;
+    Progress::written(settings.progress, frame.frame, &path, film.passes, frame.elapsed_s, stopped_by.as_str());
+    report.frames.push(FrameReport {
+        frame: frame.frame,
+        path,
+        passes: film.passes,
+        film,
+        elapsed_s: frame.elapsed_s,
+        stats: frame.stats,
+        stopped_by,
+        error: summarize(&errors),
+    });
+    Ok(())
 }

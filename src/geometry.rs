@@ -27,6 +27,17 @@ pub fn offset_origin(p: Vec3, ng: Vec3, direction: Vec3) -> Vec3 {
     Vec3::new(offset(p.x, n.x), offset(p.y, n.y), offset(p.z, n.z))
 }
 
+/// Whether the ray from `origin` along `direction` meets the box `[lo, hi]` before `t_max`
+/// (the slab test; a ray starting inside meets it).
+pub fn ray_meets_box(origin: Vec3, direction: Vec3, t_max: f32, (lo, hi): (Vec3, Vec3)) -> bool {
+    let inverse = direction.recip();
+    let (a, b) = ((lo - origin) * inverse, (hi - origin) * inverse);
+    // NaN (a zero direction component on a slab's plane) must not exclude: max/min skip NaN.
+    let near = a.min(b).max_element().max(0.0);
+    let far = a.max(b).min_element().min(t_max);
+    near <= far
+}
+
 /// A cone of directions about an axis, kept as `1 - cos(half-angle)`: near 1, cosines of narrow
 /// cones (a 0.1 degree spot, the sun's 0.27 degree radius) differ in their last f32 bits, but
 /// `1 - cos` keeps full precision.

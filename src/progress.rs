@@ -16,12 +16,12 @@ pub struct Progress {
     style: ProgressStyle,
     bar: Option<indicatif::ProgressBar>,
     limit: Option<u64>,
-    frame: i32,
 }
 
 impl Progress {
-    /// A display for a frame of `limit` passes (or until the time budget).
-    pub fn new(style: ProgressStyle, frame: i32, limit: Option<u64>) -> Self {
+    /// A display for `frames` rendered together, for `limit` passes (or until the time budget or
+    /// the target error).
+    pub fn new(style: ProgressStyle, frames: &[i32], limit: Option<u64>) -> Self {
         let bar = (style == ProgressStyle::Bar).then(|| {
             let bar =
                 indicatif::ProgressBar::with_draw_target(limit, indicatif::ProgressDrawTarget::stderr());
@@ -32,19 +32,25 @@ impl Progress {
             };
             let style = indicatif::ProgressStyle::with_template(template).expect("valid template");
             bar.set_style(style.progress_chars("=> "));
-            bar.set_prefix(format!("frame {frame}"));
+            bar.set_prefix(match frames {
+                [frame] => format!("frame {frame}"),
+                _ => format!("frames {}-{}", frames[0], frames[frames.len() - 1]),
+            });
             bar
         });
-        Progress { style, bar, limit, frame }
+        Progress { style, bar, limit }
     }
 
-    /// Reports that `pass` passes are done after `elapsed_s` seconds.
-    pub fn update(&self, pass: u64, elapsed_s: f64) {
+    /// Reports that `frames` have rendered `pass` passes, after `elapsed_s` seconds each (a frame's
+    /// share of the time its block took). A JSON line is `{"frame", "frames", "pass", "passes", "elapsed_s"}`, where
+    /// `frame` is the first of `frames`.
+    pub fn update(&self, frames: &[i32], pass: u64, elapsed_s: f64) {
         match self.style {
             ProgressStyle::Bar => self.bar.as_ref().expect("bar style has a bar").set_position(pass),
             ProgressStyle::Json => println!(
                 "{}",
-                serde_json::json!({"frame": self.frame, "pass": pass, "passes": self.limit, "elapsed_s": elapsed_s})
+                serde_json::json!({"frame": frames[0], "frames": frames, "pass": pass, "passes": self.limit,
+                    "elapsed_s": elapsed_s})
             ),
             ProgressStyle::None => {}
         }
@@ -73,7 +79,8 @@ impl Progress {
                 serde_json::json!({"frame": frame, "written": path.display().to_string(), "passes": passes,
                     "elapsed_s": elapsed_s, "stopped_by": stopped_by})
             ),
-            _ => eprintln!("caustic: wrote {} ({passes} passes, {elapsed_s:.1} s)", path.display()),
+            ProgressStyle::Bar => eprintln!("caustic: wrote {} ({passes} passes, {elapsed_s:.1} s)", path.display()),
+            ProgressStyle::None => {}
         }
     }
 }

@@ -29,7 +29,9 @@ pub fn stream(seed: u64, kind: Stream, pass: u64, index: u64) -> Sampler {
     Sampler(Pcg32::new(mix(key ^ index), key | 1))
 }
 
-/// A stream of uniform numbers in [0, 1).
+/// A stream of uniform numbers in [0, 1). Cloning it saves its state, so a path can be resumed
+/// later with exactly the numbers it would have drawn.
+#[derive(Clone)]
 pub struct Sampler(Pcg32);
 
 impl Sampler {

@@ -104,6 +104,8 @@ pub struct Scene {
     pub moving_triangle_lights: Vec<u32>,
     /// Indices in `lights` of the distant lights a ray leaving the scene can see.
     pub distant_lights: Vec<usize>,
+    /// Indices in `lights` of the lights that move within the prepared range.
+    pub moving_lights: std::ops::Range<usize>,
     /// The camera at this time.
     pub camera: Camera,
     /// The resolution the scene asks for, if it does.

@@ -12,7 +12,7 @@ use glam::{Mat3, Mat4, Vec3};
 use super::description::{Description, Lens, LensSettings, MeshInstance, PunctualKind, PunctualLight};
 use super::{bounding_sphere, Geometry, Scene, NOT_A_LIGHT};
 use crate::camera::Camera;
-use crate::lights::Light;
+use crate::lights::{BoundingSphere, Light};
 use crate::materials::Material;
 
 /// A span of glTF time, in seconds, that a render covers (frames and their shutters).
@@ -46,6 +46,7 @@ pub struct Prepared {
     camera_moves: bool,
     lens: Option<Lens>,
     materials: Arc<Vec<Material>>,
+    sphere: BoundingSphere,
 }
 
 /// Flattens `mesh` with the world matrix `world` into `out`.
@@ -95,6 +96,26 @@ fn punctual(light: &PunctualLight, world: Mat4) -> Light {
     }
 }
 
+/// Times at which moving meshes are posed to bound their sweep over a range.
+const SWEEP_SAMPLES: usize = 64;
+
+/// A box around `mesh` posed anywhere in `range`: its local box's corners posed at
+/// [`SWEEP_SAMPLES`] + 1 times, grown by a tenth of its diagonal for what turns between them.
+fn swept_bounds(description: &Description, mesh: &MeshInstance, range: TimeRange) -> Option<(Vec3, Vec3)> {
+    let first = *mesh.positions.first()?;
+    let (lo, hi) = mesh.positions.iter().fold((first, first), |(lo, hi), &p| (lo.min(p), hi.max(p)));
+    let corners: Vec<Vec3> =
+        (0..8).map(|k| Vec3::select(glam::BVec3::new(k & 1 != 0, k & 2 != 0, k & 4 != 0), hi, lo)).collect();
+    let times = (0..=SWEEP_SAMPLES).map(|i| range.start + (range.end - range.start) * i as f32 / SWEEP_SAMPLES as f32);
+    let posed = times.flat_map(|t| {
+        let world = description.rig.world(mesh.node, t);
+        corners.iter().map(move |&c| world.transform_point3(c))
+    });
+    let (lo, hi) = posed.map(|p| (p, p)).reduce(|(a, b), (c, d)| (a.min(c), b.max(d)))?;
+    let margin = Vec3::splat((hi - lo).length() * 0.1);
+    Some((lo - margin, hi + margin))
+}
+
 /// The thin lens the settings ask for, or `None` for a pinhole.
 pub fn lens(settings: Option<LensSettings>, focal_length_mm: f32) -> Option<Lens> {
     let s = settings?;
@@ -134,6 +155,10 @@ impl Prepared {
         let (emitters, fixed_triangle_lights) =
             triangle_lights(&fixed, &description.materials, fixed_lights.len());
         fixed_lights.extend(emitters);
+        // Distant lights aim their photons at one sphere for the whole range, so that a photon
+        // path from the sun is the same in every frame (reuse across frames).
+        let swept = moving_meshes.iter().filter_map(|&m| swept_bounds(&description, &description.meshes[m], range));
+        let sphere = bounding_sphere(fixed.bounds().into_iter().chain(swept));
         Prepared {
             camera_moves: moves(description.camera.node),
             materials: Arc::new(description.materials.clone()),
@@ -145,6 +170,7 @@ impl Prepared {
             moving_meshes,
             moving_lights,
             lens,
+            sphere,
         }
     }
 
@@ -191,12 +217,14 @@ impl Prepared {
             flatten(&d.meshes[m], d.rig.world(d.meshes[m].node, time), &mut moving);
         }
         let mut lights = self.fixed_lights.clone();
+        let first_moving_light = lights.len();
         lights.extend(
             self.moving_lights.iter().map(|&l| punctual(&d.lights[l], d.rig.world(d.lights[l].node, time))),
         );
         let (emitters, moving_triangle_lights) = triangle_lights(&moving, &self.materials, lights.len());
         lights.extend(emitters);
-        let sphere = bounding_sphere([self.fixed.bounds(), moving.bounds()].into_iter().flatten());
+        let moving_lights = first_moving_light..lights.len();
+        let sphere = self.sphere;
         let mut distant_lights = Vec::new();
         for (i, light) in lights.iter_mut().enumerate() {
             if let Light::Sun { sphere: s, disc, .. } = light {
@@ -221,6 +249,7 @@ impl Prepared {
             fixed_triangle_lights: Arc::clone(&self.fixed_triangle_lights),
             moving_triangle_lights,
             distant_lights,
+            moving_lights,
             camera: Camera::from_node(camera_world, d.camera.yfov).with_lens(self.lens),
             resolution: d.resolution,
             aspect_ratio: d.camera.aspect_ratio,

@@ -33,58 +33,94 @@ pub struct DirectLight<'a> {
     pub point: &'a VisiblePoint,
 }
 
+/// A ray that must reach its end for a direct-light term to count.
+#[derive(Clone, Copy, Debug)]
+pub struct ShadowRay {
+    /// Where it starts (already offset from the surface).
+    pub origin: Vec3,
+    /// Its unit direction.
+    pub direction: Vec3,
+    /// How far it must be free.
+    pub t_max: f32,
+}
+
+/// One direct-light estimate, and the ray it travelled (`None` when the term is zero whatever
+/// else is in the scene).
+#[derive(Clone, Copy, Debug)]
+pub struct DirectTerm {
+    /// The weighted radiance it adds.
+    pub value: f32,
+    /// What must be free for it to count.
+    pub ray: Option<ShadowRay>,
+}
+
+impl DirectTerm {
+    /// A term that is zero whatever else is in the scene.
+    pub const ZERO: DirectTerm = DirectTerm { value: 0.0, ray: None };
+}
+
 impl DirectLight<'_> {
-    /// One light-sampled and one BSDF-sampled estimate, combined by MIS.
-    pub fn estimate(&self, rng: &mut Sampler, stats: &mut PassStats) -> f32 {
-        self.light_sampled(rng, stats) + self.bsdf_sampled(rng, stats)
+    /// One light-sampled and one BSDF-sampled term, to be combined by MIS (their sum).
+    pub fn estimate(&self, rng: &mut Sampler, stats: &mut PassStats) -> [DirectTerm; 2] {
+        [self.light_sampled(rng, stats), self.bsdf_sampled(rng, stats)]
     }
 
     /// Direct light by sampling a light (chosen by power) and a point on it, weighted by multiple
     /// importance sampling against BSDF sampling (Veach 1997, chapter 9).
-    fn light_sampled(&self, rng: &mut Sampler, stats: &mut PassStats) -> f32 {
+    fn light_sampled(&self, rng: &mut Sampler, stats: &mut PassStats) -> DirectTerm {
         let (renderer, point, lambda_nm) = (self.renderer, self.point, self.lambda_nm);
-        let Some((index, p_choice)) = renderer.light_choice.sample(rng.next_1d()) else { return 0.0 };
+        let Some((index, p_choice)) = renderer.light_choice.sample(rng.next_1d()) else {
+            return DirectTerm::ZERO;
+        };
         let light = &renderer.scene.lights[index];
-        let Some(sample) = light.sample_incident(point.p, rng.next_2d(), lambda_nm) else { return 0.0 };
+        let Some(sample) = light.sample_incident(point.p, rng.next_2d(), lambda_nm) else {
+            return DirectTerm::ZERO;
+        };
         let ShadingFrame { n, ng } = point.frame;
         if ng.dot(sample.wi) * ng.dot(point.wo) <= 0.0 {
-            return 0.0;
+            return DirectTerm::ZERO;
         }
         let f = point.bsdf.eval(n, point.wo, sample.wi);
         if f <= 0.0 {
-            return 0.0;
+            return DirectTerm::ZERO;
         }
         stats.shadow_rays += 1;
-        if !renderer.unoccluded(point.p, ng, sample.wi, sample.distance) {
-            return 0.0;
+        let origin = offset_origin(point.p, ng, sample.wi);
+        let t_max = if sample.distance.is_finite() { sample.distance * (1.0 - 1e-4) } else { f32::INFINITY };
+        let ray = ShadowRay { origin, direction: sample.wi, t_max };
+        if renderer.accel.occluded(origin, sample.wi, t_max) {
+            return DirectTerm::ZERO;
         }
         let weight = if sample.pdf > 0.0 {
             power_heuristic(p_choice * sample.pdf, point.bsdf.pdf(n, point.wo, sample.wi))
         } else {
             1.0
         };
-        f * n.dot(sample.wi).abs() * sample.radiance_over_pdf / p_choice * weight
+        let value = f * n.dot(sample.wi).abs() * sample.radiance_over_pdf / p_choice * weight;
+        DirectTerm { value, ray: Some(ray) }
     }
 
     /// Direct light by sampling the BSDF and looking at what emits along the sampled ray, weighted
     /// by multiple importance sampling against light sampling.
-    fn bsdf_sampled(&self, rng: &mut Sampler, stats: &mut PassStats) -> f32 {
+    fn bsdf_sampled(&self, rng: &mut Sampler, stats: &mut PassStats) -> DirectTerm {
         let (renderer, point, lambda_nm) = (self.renderer, self.point, self.lambda_nm);
         let scene = renderer.scene;
         let (u, u_lobe) = (rng.next_2d(), rng.next_1d());
         let Some(sample) = point.bsdf.sample(point.frame, point.wo, u, u_lobe, Transport::Radiance) else {
-            return 0.0;
+            return DirectTerm::ZERO;
         };
         if sample.pdf <= 0.0 || point.frame.ng.dot(sample.wi) * point.frame.ng.dot(point.wo) <= 0.0 {
-            return 0.0;
+            return DirectTerm::ZERO;
         }
         stats.shadow_rays += 1;
         let origin = offset_origin(point.p, point.frame.ng, sample.wi);
         let light_pdf = |index: usize, q: Vec3| {
             renderer.light_choice.probability(index) * scene.lights[index].pdf_incident(point.p, sample.wi, q)
         };
-        let Some(hit) = renderer.accel.intersect(origin, sample.wi, f32::INFINITY) else {
-            return scene
+        let hit = renderer.accel.intersect(origin, sample.wi, f32::INFINITY);
+        let ray = Some(ShadowRay { origin, direction: sample.wi, t_max: hit.map_or(f32::INFINITY, |h| h.t) });
+        let Some(hit) = hit else {
+            let value = scene
                 .distant_lights
                 .iter()
                 .map(|&i| {
@@ -92,14 +128,16 @@ impl DirectLight<'_> {
                     sample.weight * radiance * power_heuristic(sample.pdf, light_pdf(i, Vec3::ZERO))
                 })
                 .sum();
+            return DirectTerm { value, ray };
         };
         let light = scene.triangle_light(hit.triangle);
         if light == NOT_A_LIGHT {
-            return 0.0;
+            return DirectTerm::ZERO;
         }
         let surface = scene.surface(hit.triangle, hit.barycentric);
         let material = &scene.materials[surface.material as usize];
         let radiance = material.emitted(lambda_nm, surface.frame.ng, -sample.wi);
-        sample.weight * radiance * power_heuristic(sample.pdf, light_pdf(light as usize, surface.p))
+        let value = sample.weight * radiance * power_heuristic(sample.pdf, light_pdf(light as usize, surface.p));
+        DirectTerm { value, ray }
     }
 }

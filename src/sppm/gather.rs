@@ -7,38 +7,74 @@
 //! of `K` estimates the Laplacian of the radiance, which the error bound's bias term needs
 //! (Hachisuka, Jarosz & Jensen 2010).
 
+use glam::Vec3;
 use rayon::prelude::*;
 use std::f32::consts::PI;
 
 use super::grid::PhotonGrid;
 use super::visible::EyeResult;
-use super::{Photon, PixelEstimate};
+use super::{Photon, PixelEstimate, VisiblePoint};
+
+/// Photons bucketed for gathering at one radius.
+pub struct PhotonSet<'a> {
+    photons: &'a [Photon],
+    grid: PhotonGrid,
+    /// The box around the photons grown by the radius (`None` when there are none).
+    reach: Option<(Vec3, Vec3)>,
+    r2: f32,
+}
+
+impl<'a> PhotonSet<'a> {
+    /// Buckets `photons` for gathers of radius `radius`.
+    pub fn new(photons: &'a [Photon], radius: f32) -> Self {
+        let grid = PhotonGrid::build(photons.iter().map(|p| p.p), photons.len(), radius);
+        let reach = photons
+            .iter()
+            .map(|p| (p.p, p.p))
+            .reduce(|(a, b), (c, d)| (a.min(c), b.max(d)))
+            .map(|(lo, hi)| (lo - Vec3::splat(radius), hi + Vec3::splat(radius)));
+        PhotonSet { photons, grid, reach, r2: radius * radius }
+    }
+
+    /// The kernel-weighted sum of the photons' reflected flux at `vp`, and the same with the
+    /// kernel's Laplacian, before the path throughput.
+    pub fn sum_at(&self, vp: &VisiblePoint) -> [f32; 2] {
+        let Some((lo, hi)) = self.reach else { return [0.0; 2] };
+        if vp.p.cmplt(lo).any() || vp.p.cmpgt(hi).any() {
+            return [0.0; 2];
+        }
+        let r2 = self.r2;
+        let kernel_scale = 3.0 / (PI * r2);
+        let laplacian_scale = -8.0 * kernel_scale / r2;
+        let (mut sum, mut laplacian) = (0.0f32, 0.0f32);
+        self.grid.for_each_near(vp.p, |i| {
+            let photon = &self.photons[i];
+            let d2 = photon.p.distance_squared(vp.p);
+            if d2 >= r2 || photon.ng.dot(vp.frame.ng) * vp.frame.ng.dot(vp.wo) <= 0.0 {
+                return;
+            }
+            let t2 = d2 / r2;
+            let weighted = photon.flux * vp.bsdf.eval(vp.frame.n, vp.wo, photon.wi);
+            sum += weighted * kernel_scale * (1.0 - t2) * (1.0 - t2);
+            laplacian += weighted * laplacian_scale * (1.0 - 2.0 * t2);
+        });
+        [sum, laplacian]
+    }
+}
+
+/// A pixel's estimate from its eye result and the photon sums at its visible point.
+pub fn estimate(eye: &EyeResult, [sum, laplacian]: [f32; 2]) -> PixelEstimate {
+    match eye.point {
+        Some(vp) => PixelEstimate { radiance: eye.radiance + vp.beta * sum, laplacian: vp.beta * laplacian },
+        None => PixelEstimate { radiance: eye.radiance, laplacian: 0.0 },
+    }
+}
 
 /// Every pixel's estimate from its eye result and the pass's photons.
 pub fn gather(eye: &[EyeResult], photons: &[Photon], radius: f32) -> Vec<PixelEstimate> {
-    let grid = PhotonGrid::build(photons.iter().map(|p| p.p), photons.len(), radius);
-    let r2 = radius * radius;
-    let kernel_scale = 3.0 / (PI * r2);
-    let laplacian_scale = -8.0 * kernel_scale / r2;
+    let set = PhotonSet::new(photons, radius);
     eye.par_iter()
         .with_min_len(64)
-        .map(|e| {
-            let Some(vp) = e.point else {
-                return PixelEstimate { radiance: e.radiance, laplacian: 0.0 };
-            };
-            let (mut sum, mut laplacian) = (0.0f32, 0.0f32);
-            grid.for_each_near(vp.p, |i| {
-                let photon = &photons[i];
-                let d2 = photon.p.distance_squared(vp.p);
-                if d2 >= r2 || photon.ng.dot(vp.frame.ng) * vp.frame.ng.dot(vp.wo) <= 0.0 {
-                    return;
-                }
-                let t2 = d2 / r2;
-                let weighted = photon.flux * vp.bsdf.eval(vp.frame.n, vp.wo, photon.wi);
-                sum += weighted * kernel_scale * (1.0 - t2) * (1.0 - t2);
-                laplacian += weighted * laplacian_scale * (1.0 - 2.0 * t2);
-            });
-            PixelEstimate { radiance: e.radiance + vp.beta * sum, laplacian: vp.beta * laplacian }
-        })
+        .map(|e| estimate(e, e.point.map_or([0.0; 2], |vp| set.sum_at(&vp))))
         .collect()
 }

@@ -9,6 +9,7 @@ mod gather;
 mod grid;
 mod photons;
 pub mod radius;
+mod shared;
 mod visible;
 
 use glam::Vec3;
@@ -23,6 +24,7 @@ use crate::scene::Scene;
 use crate::spectrum::sample_visible_wavelength;
 
 pub use photons::Photon;
+pub use shared::{run_shared_pass, SharedPassOutput};
 
 /// Longest path (bounces) an eye path follows through delta surfaces, and a photon overall.
 pub const MAX_DEPTH: u32 = 32;
@@ -61,6 +63,19 @@ pub struct SppmSettings {
     pub fixed_wavelength_nm: Option<f32>,
 }
 
+impl SppmSettings {
+    /// The wavelength and radius of pass `index` (0-based).
+    pub fn pass_samples(&self, index: u64) -> PassSamples {
+        let (lambda_nm, lambda_pdf) = match self.fixed_wavelength_nm {
+            Some(lambda_nm) => (lambda_nm, 1.0),
+            None => sample_visible_wavelength(pass_sample(self.seed, index)),
+        };
+        let r1_squared = self.initial_radius * self.initial_radius;
+        let radius = radius::radius_squared(r1_squared, self.alpha, index + 1).sqrt() as f32;
+        PassSamples { index, lambda_nm, lambda_pdf, radius }
+    }
+}
+
 /// What pass `i` shares between all its pixels and photons (DESIGN.md step 1).
 #[derive(Clone, Copy, Debug)]
 pub struct PassSamples {
@@ -96,6 +111,8 @@ pub struct PassStats {
     pub photons_stored: u64,
     /// Points drawn on the camera's aperture (zero for a pinhole).
     pub lens_samples: u64,
+    /// Segments of shared paths tested against a frame's moving triangles (reuse across frames).
+    pub moving_tests: u64,
 }
 
 impl std::ops::Add for PassStats {
@@ -107,6 +124,7 @@ impl std::ops::Add for PassStats {
             photon_rays: self.photon_rays + o.photon_rays,
             photons_stored: self.photons_stored + o.photons_stored,
             lens_samples: self.lens_samples + o.lens_samples,
+            moving_tests: self.moving_tests + o.moving_tests,
         }
     }
 }
@@ -126,6 +144,12 @@ impl<'a> Renderer<'a> {
         Renderer { scene, accel, light_choice, settings }
     }
 
+    /// A renderer for `scene` that chooses lights as `other` does (frames that share photon
+    /// paths must choose their lights alike).
+    pub fn choosing_lights_as(other: &Renderer, scene: &'a Scene, accel: &'a Accel) -> Self {
+        Renderer { scene, accel, light_choice: other.light_choice.clone(), settings: other.settings.clone() }
+    }
+
     /// The settings.
     pub fn settings(&self) -> &SppmSettings {
         &self.settings
@@ -133,13 +157,7 @@ impl<'a> Renderer<'a> {
 
     /// The wavelength and radius of pass `index` (0-based).
     pub fn pass_samples(&self, index: u64) -> PassSamples {
-        let (lambda_nm, lambda_pdf) = match self.settings.fixed_wavelength_nm {
-            Some(lambda_nm) => (lambda_nm, 1.0),
-            None => sample_visible_wavelength(pass_sample(self.settings.seed, index)),
-        };
-        let r1_squared = self.settings.initial_radius * self.settings.initial_radius;
-        let radius = radius::radius_squared(r1_squared, self.settings.alpha, index + 1).sqrt() as f32;
-        PassSamples { index, lambda_nm, lambda_pdf, radius }
+        self.settings.pass_samples(index)
     }
 
     /// Renders pass `index`: one estimate per pixel, in row-major order.
@@ -180,12 +198,5 @@ impl<'a> Renderer<'a> {
             .collect();
         let stats = chunks.iter().fold(PassStats::default(), |a, (_, s)| a + *s);
         (chunks.into_iter().flat_map(|(p, _)| p).collect(), stats)
-    }
-
-    /// Whether nothing blocks the segment from `p` (normal `ng`) along `wi` for `distance`.
-    fn unoccluded(&self, p: Vec3, ng: Vec3, wi: Vec3, distance: f32) -> bool {
-        let origin = crate::geometry::offset_origin(p, ng, wi);
-        let t_max = if distance.is_finite() { distance * (1.0 - 1e-4) } else { f32::INFINITY };
-        !self.accel.occluded(origin, wi, t_max)
     }
 }

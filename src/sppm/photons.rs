@@ -1,13 +1,17 @@
 //! The photon pass (DESIGN.md step 3): photons leave lights chosen by power, at the pass
 //! wavelength, and random-walk with Russian roulette. A photon is stored at every non-delta
 //! vertex from the second on: the first is direct light, which next-event estimation counts.
+//!
+//! A path is a [`PhotonState`] advanced segment by segment; a caller can watch each segment
+//! before it is traced and resume the path later from any saved state, drawing exactly the random
+//! numbers it would have drawn (reuse across frames needs both).
 
 use glam::Vec3;
 
 use super::{PassSamples, PassStats, Renderer, MAX_DEPTH};
 use crate::geometry::offset_origin;
 use crate::materials::Transport;
-use crate::sampling::{stream, Stream};
+use crate::sampling::{stream, Sampler, Stream};
 
 /// A stored photon.
 #[derive(Clone, Copy, Debug)]
@@ -22,31 +26,67 @@ pub struct Photon {
     pub flux: f32,
 }
 
+/// A photon path about to trace its next segment.
+#[derive(Clone)]
+pub struct PhotonState {
+    /// Where the segment starts.
+    pub origin: Vec3,
+    /// Its unit direction.
+    pub direction: Vec3,
+    /// The flux carried.
+    pub flux: f32,
+    /// Segments traced before this one.
+    pub depth: u32,
+    /// The path's random stream, where this segment leaves it.
+    pub rng: Sampler,
+}
+
+/// Photon path `k` of `pass` as it leaves its light, and the index of that light; `None` when no
+/// light emits at the pass wavelength.
+pub fn start_photon(renderer: &Renderer, pass: &PassSamples, k: u64) -> Option<(PhotonState, usize)> {
+    let mut rng = stream(renderer.settings.seed, Stream::Photon, pass.index, k);
+    let (index, p_light) = renderer.light_choice.sample(rng.next_1d())?;
+    let emitted = renderer.scene.lights[index].emit_photon(rng.next_2d(), rng.next_2d(), pass.lambda_nm)?;
+    let flux = emitted.flux / (p_light * renderer.settings.photons_per_pass as f32);
+    Some((PhotonState { origin: emitted.origin, direction: emitted.direction, flux, depth: 0, rng }, index))
+}
+
 /// Traces photon path `k` of `pass`, appending what it stores to `out`.
 pub fn trace_photon(renderer: &Renderer, pass: &PassSamples, k: u64, out: &mut Vec<Photon>) -> PassStats {
+    match start_photon(renderer, pass, k) {
+        Some((state, _)) => continue_photon(renderer, pass, state, out, |_, _, _| {}),
+        None => PassStats::default(),
+    }
+}
+
+/// Traces a path from `state` to its end, appending what it stores to `out`. Before each
+/// segment's photon is stored, `watch` sees the state the segment started from, the distance to
+/// what it hit (infinite when it left the scene) and how many photons the path had stored.
+pub fn continue_photon(
+    renderer: &Renderer,
+    pass: &PassSamples,
+    mut state: PhotonState,
+    out: &mut Vec<Photon>,
+    mut watch: impl FnMut(&PhotonState, f32, usize),
+) -> PassStats {
     let scene = renderer.scene;
-    let mut rng = stream(renderer.settings.seed, Stream::Photon, pass.index, k);
     let mut stats = PassStats::default();
-    let Some((index, p_light)) = renderer.light_choice.sample(rng.next_1d()) else {
-        return stats;
-    };
-    let Some(emitted) = scene.lights[index].emit_photon(rng.next_2d(), rng.next_2d(), pass.lambda_nm) else {
-        return stats;
-    };
-    let mut flux = emitted.flux / (p_light * renderer.settings.photons_per_pass as f32);
-    let (mut origin, mut direction) = (emitted.origin, emitted.direction);
-    for depth in 0..MAX_DEPTH {
+    let first_stored = out.len();
+    while state.depth < MAX_DEPTH {
         stats.photon_rays += 1;
-        let Some(hit) = renderer.accel.intersect(origin, direction, f32::INFINITY) else {
+        let hit = renderer.accel.intersect(state.origin, state.direction, f32::INFINITY);
+        watch(&state, hit.map_or(f32::INFINITY, |h| h.t), out.len() - first_stored);
+        let Some(hit) = hit else {
             break;
         };
         let surface = scene.surface(hit.triangle, hit.barycentric);
         let material = &scene.materials[surface.material as usize];
-        let wo = -direction;
+        let wo = -state.direction;
+        let rng = &mut state.rng;
         let bsdf = material.bsdf(surface.uv, pass.lambda_nm, rng.next_1d());
-        if !bsdf.is_delta() && depth > 0 {
+        if !bsdf.is_delta() && state.depth > 0 {
             let ng = if surface.frame.ng.dot(wo) < 0.0 { -surface.frame.ng } else { surface.frame.ng };
-            out.push(Photon { p: surface.p, wi: wo, ng, flux });
+            out.push(Photon { p: surface.p, wi: wo, ng, flux: state.flux });
             stats.photons_stored += 1;
         }
         let Some(sample) =
@@ -60,9 +100,10 @@ pub fn trace_photon(renderer: &Renderer, pass: &PassSamples, k: u64, out: &mut V
         if rng.next_1d() >= survive {
             break;
         }
-        flux *= sample.weight / survive;
-        origin = offset_origin(surface.p, surface.frame.ng, sample.wi);
-        direction = sample.wi;
+        state.flux *= sample.weight / survive;
+        state.origin = offset_origin(surface.p, surface.frame.ng, sample.wi);
+        state.direction = sample.wi;
+        state.depth += 1;
     }
     stats
 }

@@ -1,14 +1,17 @@
 //! The eye pass (DESIGN.md step 2): a camera ray per pixel, followed through delta bounces to the
 //! first non-delta surface, where direct light is estimated by next-event estimation and a
 //! visible point is left for the photons to be gathered at (direct light: [`DirectLight`]).
+//!
+//! Like photon paths, an eye path is an [`EyeState`] advanced segment by segment, which a caller
+//! can watch and resume (reuse across frames).
 
-use glam::Vec2;
+use glam::{Vec2, Vec3};
 
-use super::direct::DirectLight;
+use super::direct::{DirectLight, DirectTerm};
 use super::{PassSamples, PassStats, Renderer, VisiblePoint, MAX_DEPTH};
 use crate::geometry::offset_origin;
 use crate::materials::{Bsdf, Transport};
-use crate::sampling::{stream, Stream};
+use crate::sampling::{stream, Sampler, Stream};
 
 /// A pixel's eye path: the radiance found along it, and its visible point if it has one.
 #[derive(Clone, Copy, Debug)]
@@ -19,53 +22,117 @@ pub struct EyeResult {
     pub point: Option<VisiblePoint>,
 }
 
-/// Traces pixel `pixel`'s camera path for `pass`.
-pub fn trace_eye_path(renderer: &Renderer, pass: &PassSamples, pixel: usize) -> (EyeResult, PassStats) {
+/// An eye path about to trace its next segment.
+#[derive(Clone)]
+pub struct EyeState {
+    /// Where the segment starts.
+    pub origin: Vec3,
+    /// Its unit direction.
+    pub direction: Vec3,
+    /// Throughput from the camera.
+    pub beta: f32,
+    /// Radiance found so far.
+    pub radiance: f32,
+    /// Segments traced before this one.
+    pub depth: u32,
+    /// The path's random stream, where this segment leaves it.
+    pub rng: Sampler,
+}
+
+/// An eye path's end: its result, and the direct-light terms whose sum (times the throughput)
+/// it added at the visible point.
+#[derive(Clone, Copy, Debug)]
+pub struct EyeEnd {
+    /// The pixel's result.
+    pub result: EyeResult,
+    /// Radiance found before the visible point.
+    pub radiance_before: f32,
+    /// Light-sampled and BSDF-sampled direct light at the visible point.
+    pub direct: [DirectTerm; 2],
+}
+
+/// Pixel `pixel`'s camera ray for `pass` (the film sample and, with a lens, the aperture sample).
+pub fn start_eye_path(renderer: &Renderer, pass: &PassSamples, pixel: usize) -> (EyeState, PassStats) {
     let settings = &renderer.settings;
-    let scene = renderer.scene;
+    let camera = &renderer.scene.camera;
     let mut rng = stream(settings.seed, Stream::Eye, pass.index, pixel as u64);
     let (width, height) = (settings.width as usize, settings.height as usize);
     let film = (Vec2::new((pixel % width) as f32, (pixel / width) as f32) + rng.next_2d())
         / Vec2::new(width as f32, height as f32);
     let mut stats = PassStats::default();
     let aspect = width as f32 / height as f32;
-    let (mut origin, mut direction) = match scene.camera.lens {
+    let (origin, direction) = match camera.lens {
         Some(_) => {
             stats.lens_samples += 1;
-            scene.camera.ray_through_lens(film, aspect, rng.next_2d())
+            camera.ray_through_lens(film, aspect, rng.next_2d())
         }
-        None => scene.camera.ray(film, aspect),
+        None => camera.ray(film, aspect),
     };
-    let mut result = EyeResult { radiance: 0.0, point: None };
-    let mut beta = 1.0f32;
-    for _ in 0..MAX_DEPTH {
+    (EyeState { origin, direction, beta: 1.0, radiance: 0.0, depth: 0, rng }, stats)
+}
+
+/// Traces pixel `pixel`'s camera path for `pass`.
+pub fn trace_eye_path(renderer: &Renderer, pass: &PassSamples, pixel: usize) -> (EyeResult, PassStats) {
+    let (state, start_stats) = start_eye_path(renderer, pass, pixel);
+    let (end, stats) = continue_eye_path(renderer, pass, state, |_, _| {});
+    (end.result, start_stats + stats)
+}
+
+/// Traces an eye path from `state` to its end. Before a segment's hit is shaded, `watch` sees
+/// the state the segment started from and the distance to what it hit (infinite when it left
+/// the scene).
+pub fn continue_eye_path(
+    renderer: &Renderer,
+    pass: &PassSamples,
+    mut state: EyeState,
+    mut watch: impl FnMut(&EyeState, f32),
+) -> (EyeEnd, PassStats) {
+    let scene = renderer.scene;
+    let mut stats = PassStats::default();
+    let mut point = None;
+    let mut direct = [DirectTerm::ZERO; 2];
+    let mut radiance_before = 0.0;
+    while state.depth < MAX_DEPTH {
         stats.eye_rays += 1;
-        let Some(hit) = renderer.accel.intersect(origin, direction, f32::INFINITY) else {
-            result.radiance += beta * scene.escaped_radiance(direction, pass.lambda_nm);
+        let hit = renderer.accel.intersect(state.origin, state.direction, f32::INFINITY);
+        watch(&state, hit.map_or(f32::INFINITY, |h| h.t));
+        let Some(hit) = hit else {
+            state.radiance += state.beta * scene.escaped_radiance(state.direction, pass.lambda_nm);
             break;
         };
         let surface = scene.surface(hit.triangle, hit.barycentric);
         let material = &scene.materials[surface.material as usize];
-        let wo = -direction;
-        result.radiance += beta * material.emitted(pass.lambda_nm, surface.frame.ng, wo);
+        let wo = -state.direction;
+        state.radiance += state.beta * material.emitted(pass.lambda_nm, surface.frame.ng, wo);
+        let rng = &mut state.rng;
         let bsdf = material.bsdf(surface.uv, pass.lambda_nm, rng.next_1d());
         if bsdf == Bsdf::Black {
             break;
         }
         if !bsdf.is_delta() {
-            let point = VisiblePoint { p: surface.p, frame: surface.frame, wo, bsdf, beta };
-            let direct = DirectLight { renderer, lambda_nm: pass.lambda_nm, point: &point };
-            result.radiance += beta * direct.estimate(&mut rng, &mut stats);
-            result.point = Some(point);
+            let visible = VisiblePoint { p: surface.p, frame: surface.frame, wo, bsdf, beta: state.beta };
+            direct = DirectLight { renderer, lambda_nm: pass.lambda_nm, point: &visible }
+                .estimate(rng, &mut stats);
+            radiance_before = state.radiance;
+            state.radiance = with_direct(radiance_before, state.beta, direct.map(|t| t.value));
+            point = Some(visible);
             break;
         }
         let Some(sample) = bsdf.sample(surface.frame, wo, rng.next_2d(), rng.next_1d(), Transport::Radiance)
         else {
             break;
         };
-        beta *= sample.weight;
-        origin = offset_origin(surface.p, surface.frame.ng, sample.wi);
-        direction = sample.wi;
+        state.beta *= sample.weight;
+        state.origin = offset_origin(surface.p, surface.frame.ng, sample.wi);
+        state.direction = sample.wi;
+        state.depth += 1;
     }
-    (result, stats)
+    let result = EyeResult { radiance: state.radiance, point };
+    (EyeEnd { result, radiance_before, direct }, stats)
+}
+
+/// The radiance of an eye path: what it found before its visible point plus the direct light
+/// there (one function, so that a path resumed in another frame adds in the same order).
+pub fn with_direct(radiance_before: f32, beta: f32, [light, bsdf]: [f32; 2]) -> f32 {
+    radiance_before + beta * (light + bsdf)
 }

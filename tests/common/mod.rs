@@ -214,6 +214,33 @@ impl GltfBuilder {
         self.nodes.push(json!({"name": name, "mesh": self.meshes.len() - 1}));
     }
 
+    /// Adds a UV sphere (`rings` x 2 `rings` facets) with smooth normals.
+    pub fn sphere(&mut self, name: &str, centre: [f32; 3], radius: f32, rings: usize, material: usize) {
+        let point = |ring: usize, segment: usize| {
+            let theta = std::f32::consts::PI * ring as f32 / rings as f32;
+            let phi = std::f32::consts::PI * segment as f32 / rings as f32;
+            glam::Vec3::new(theta.sin() * phi.cos(), theta.cos(), theta.sin() * phi.sin())
+        };
+        let (mut positions, mut normals) = (Vec::new(), Vec::new());
+        for ring in 0..rings {
+            for segment in 0..2 * rings {
+                let [a, b, c, d] =
+                    [point(ring, segment), point(ring + 1, segment), point(ring + 1, segment + 1), point(ring, segment + 1)];
+                // The first ring's second triangle and the last ring's first meet at a pole.
+                let first = if ring + 1 < rings { &[a, c, b][..] } else { &[][..] };
+                let second = if ring > 0 { &[a, d, c][..] } else { &[][..] };
+                for &n in first.iter().chain(second) {
+                    positions.extend((glam::Vec3::from(centre) + n * radius).to_array());
+                    normals.extend(n.to_array());
+                }
+            }
+        }
+        let position = self.add_accessor(&positions, 3, "VEC3");
+        let normal = self.add_accessor(&normals, 3, "VEC3");
+        self.meshes.push(json!({"name": name, "primitives": [{"attributes": {"POSITION": position, "NORMAL": normal}, "material": material}]}));
+        self.nodes.push(json!({"name": name, "mesh": self.meshes.len() - 1}));
+    }
+
     /// Adds an axis-aligned quad at height `y` spanning `[-half, half]` in x and z, facing `+y`
     /// (or `-y` when `up` is false).
     pub fn quad_y(&mut self, name: &str, y: f32, half: f32, up: bool, material: usize) {

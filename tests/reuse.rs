@@ -1,0 +1,235 @@
+//! Reuse across frames (Weiss & Grosch's DSPPM): frames rendered together share the paths on
+//! static geometry, and must render what each frame rendered alone renders.
+//!
+//! A frame in a block gets exactly the paths it would trace alone (the shared ones where nothing
+//! moving blocks them, the rest resumed from the blocked segment with the same random numbers),
+//! so a block and `--no-reuse` agree pixel for pixel up to float rounding: the photon sums are
+//! added in another order. Tolerance: 1e-4 relative (+ 1e-6 absolute), far below the noise.
+
+mod common;
+
+use caustic::frames::{self, RenderReport, RenderSettings};
+use caustic::scene::Scene;
+use common::*;
+use glam::{Vec2, Vec3};
+use serde_json::json;
+use std::path::{Path, PathBuf};
+
+fn render_frames(settings: &RenderSettings, threads: usize) -> RenderReport {
+    let pool = rayon::ThreadPoolBuilder::new().num_threads(threads).build().unwrap();
+    pool.install(|| frames::render(settings)).unwrap_or_else(|e| panic!("render failed: {e}"))
+}
+
+fn frame_image(settings: &RenderSettings, frame: i32) -> Image {
+    read_exr(&frames::frame_path(&settings.out_dir, frame))
+}
+
+/// Asserts that every channel of every pixel of `a` is within `1e-4 |b| + 1e-6` of `b`.
+fn assert_same_up_to_rounding(a: &Image, b: &Image, what: &str) {
+    let worst = a
+        .rgb
+        .iter()
+        .zip(&b.rgb)
+        .flat_map(|(p, q)| (0..3).map(move |c| (p[c] - q[c]).abs() / (1e-4 * q[c].abs() + 1e-6)))
+        .fold(0.0, f64::max);
+    assert!(worst <= 1.0, "{what}: differs by {worst:.1} times the rounding tolerance");
+}
+
+/// Renders `scene`'s `frames` with reuse and with `--no-reuse` for several seeds, and compares
+/// every frame; returns the reuse run's block length.
+fn assert_reuse_renders_each_frame_alone(scene: &Path, frames: &[i32], resolution: [u32; 2]) -> usize {
+    let dir = tempfile::tempdir().unwrap();
+    let mut block = 0;
+    for seed in [1, 2, 3] {
+        let mut shared = settings(scene, &dir.path().join(format!("shared{seed}")), 6);
+        shared.frames = frames.to_vec();
+        shared.resolution = Some(resolution);
+        shared.photons = Some(4000);
+        shared.seed = seed;
+        let alone = RenderSettings { reuse: false, out_dir: dir.path().join(format!("alone{seed}")), ..shared.clone() };
+        block = render_frames(&shared, 2).block_frames;
+        assert_eq!(render_frames(&alone, 2).block_frames, 1);
+        for &frame in frames {
+            let what = format!("{} frame {frame} seed {seed}", scene.display());
+            assert_same_up_to_rounding(&frame_image(&shared, frame), &frame_image(&alone, frame), &what);
+        }
+    }
+    block
+}
+
+#[test]
+fn a_still_camera_shares_eye_and_photon_paths_and_renders_each_frame_as_alone() {
+    let block = assert_reuse_renders_each_frame_alone(&bundled_scene("shot.gltf"), &[1, 9, 17, 24], [64, 48]);
+    assert_eq!(block, 4, "all four frames render together");
+}
+
+#[test]
+fn a_moving_camera_shares_photon_paths_and_renders_each_frame_as_alone() {
+    assert_reuse_renders_each_frame_alone(&bundled_scene("shot_moving_camera.gltf"), &[1, 12, 24], [64, 48]);
+}
+
+/// A point light that moves over a floor with a static box: its photons are traced per frame,
+/// and nothing else may change.
+#[test]
+fn a_moving_light_renders_each_frame_as_alone() {
+    let dir = tempfile::tempdir().unwrap();
+    let mut gltf = GltfBuilder::default();
+    let white = gltf.material(diffuse([0.8, 0.8, 0.8]));
+    gltf.quad_y("Floor", 0.0, 3.0, true, white);
+    gltf.sphere("Ball", [0.0, 0.5, 0.0], 0.5, 8, white);
+    gltf.light(json!({"type": "point", "intensity": 4000.0}), [-1.0, 2.0, 0.0], [0.0, -1.0, 0.0]);
+    let light = gltf.last_node();
+    gltf.animate(light, "translation", &[0.0, 1.0], &[vec![-1.0, 2.0, 0.0], vec![1.0, 2.0, 0.0]], "LINEAR");
+    gltf.camera([0.0, 3.0, 4.0], [0.0, -3.0, -4.0], 0.9);
+    gltf.scene_extras(json!({"fps": 24.0}));
+    let scene = gltf.write(dir.path(), "moving_light");
+    assert_reuse_renders_each_frame_alone(&scene, &[1, 12, 24], [48, 48]);
+}
+
+/// A white floor lit by a point light of 4 pi W/sr 4 above the origin (floor radiance
+/// 16 / d^3 at distance d), with a glass ball (radius 0.5, centre 1 above the floor) that jumps
+/// from x = -1.2 in frame 1 to x = +1.2 in frame 2, seen from above at an angle.
+fn jumping_ball_scene(dir: &Path) -> PathBuf {
+    let mut gltf = GltfBuilder::default();
+    let white = gltf.material(diffuse([1.0, 1.0, 1.0]));
+    let glass = gltf.material(json!({"pbrMetallicRoughness": {"baseColorFactor": [1.0, 1.0, 1.0, 1.0], "roughnessFactor": 0.0},
+        "extensions": {"KHR_materials_transmission": {"transmissionFactor": 1.0}}}));
+    gltf.quad_y("Floor", 0.0, 6.0, true, white);
+    gltf.sphere("Ball", [0.0, 0.0, 0.0], 0.5, 48, glass);
+    let ball = gltf.last_node();
+    gltf.animate(ball, "translation", &[0.0, 1.5 / 24.0], &[vec![-1.2, 1.0, 0.0], vec![1.2, 1.0, 0.0]], "STEP");
+    gltf.light(json!({"type": "point", "intensity": 4.0 * std::f32::consts::PI * 683.0}), [0.0, 4.0, 0.0], [0.0, -1.0, 0.0]);
+    gltf.camera_with_aspect([0.0, 5.0, 6.0], [0.0, -5.0, -6.0], 0.6, 1.5);
+    gltf.scene_extras(json!({"fps": 24.0, "resolution": [96, 64]}));
+    gltf.write(dir, "jumping_ball")
+}
+
+/// The floor's radiance without the ball, 16 / d^3, at the floor point pixel (x, y) sees.
+fn bare_floor_radiance(scene: &Scene, image: &Image, x: usize, y: usize) -> f64 {
+    let film = Vec2::new((x as f32 + 0.5) / image.width as f32, (y as f32 + 0.5) / image.height as f32);
+    let (origin, direction) = scene.camera.ray(film, image.width as f32 / image.height as f32);
+    let p = origin - direction * (origin.y / direction.y);
+    16.0 / f64::from(p.distance(Vec3::new(0.0, 4.0, 0.0))).powi(3)
+}
+
+/// Pixels whose floor point lies within `radius` of `centre` (on the floor), with the floor
+/// point's distance from `centre`.
+fn pixels_near(scene: &Scene, image: &Image, centre: Vec3, radius: f32) -> Vec<(usize, usize, f32)> {
+    let aspect = image.width as f32 / image.height as f32;
+    let mut found = Vec::new();
+    for y in 0..image.height {
+        for x in 0..image.width {
+            let film = Vec2::new((x as f32 + 0.5) / image.width as f32, (y as f32 + 0.5) / image.height as f32);
+            let (origin, direction) = scene.camera.ray(film, aspect);
+            let p = origin - direction * (origin.y / direction.y);
+            let d = p.distance(centre);
+            if d < radius {
+                found.push((x, y, d));
+            }
+        }
+    }
+    found
+}
+
+/// Mean measured luminance over `pixels`, and the bare floor's mean over the same pixels.
+fn measured_and_bare(scene: &Scene, image: &Image, pixels: &[(usize, usize, f32)]) -> (f64, f64) {
+    let n = pixels.len() as f64;
+    let measured = pixels.iter().map(|&(x, y, _)| image.luminance(x, x + 1, y, y + 1)).sum::<f64>() / n;
+    let bare = pixels.iter().map(|&(x, y, _)| bare_floor_radiance(scene, image, x, y)).sum::<f64>() / n;
+    (measured, bare)
+}
+
+/// Where the ball's shadow and caustic fall in frame 1 lies bare in frame 2 (the bare floor's
+/// value within 4%: no photon of frame 1 is left over), and the other way round; the shadow
+/// and the caustic are there in the frame the ball is above them.
+#[test]
+fn shadow_and_caustic_move_with_the_object_and_leave_no_stale_photons() {
+    let dir = tempfile::tempdir().unwrap();
+    let path = jumping_ball_scene(dir.path());
+    let mut s = settings(&path, &dir.path().join("out"), 64);
+    s.frames = vec![1, 2];
+    s.photons = Some(40_000);
+    s.radius = Some(0.02);
+    assert_eq!(render_frames(&s, 2).block_frames, 2);
+    let scene = Scene::load(&path).unwrap();
+    // The light's ray through the ball's centre meets the floor 4/3 as far out: x = +-1.6.
+    for (lit, bare, x) in [(1, 2, -1.6f32), (2, 1, 1.6)] {
+        let (with_ball, without) = (frame_image(&s, lit), frame_image(&s, bare));
+        let centre = Vec3::new(x, 0.0, 0.0);
+        let region = pixels_near(&scene, &with_ball, centre, 0.6);
+        let (value, expected) = measured_and_bare(&scene, &without, &region);
+        eprintln!("frame {bare} where the ball was in frame {lit}: {value:.4}, bare floor {expected:.4}");
+        assert!((value / expected - 1.0).abs() < 0.04, "frame {bare}: {value}, bare floor {expected}");
+        let rim: Vec<_> = region.iter().copied().filter(|p| p.2 > 0.35).collect();
+        let (shadow, bare_rim) = measured_and_bare(&scene, &with_ball, &rim);
+        let core: Vec<_> = region.iter().copied().filter(|p| p.2 < 0.12).collect();
+        let (caustic, bare_core) = measured_and_bare(&scene, &with_ball, &core);
+        eprintln!("frame {lit}: shadow rim {shadow:.4} (bare {bare_rim:.4}), caustic core {caustic:.4} (bare {bare_core:.4})");
+        assert!(shadow < 0.5 * bare_rim, "frame {lit}: no shadow under the ball ({shadow} vs {bare_rim})");
+        assert!(caustic > 2.0 * bare_core, "frame {lit}: no caustic under the ball ({caustic} vs {bare_core})");
+    }
+}
+
+/// Mean absolute difference of luminance between two images over the rows `rows`.
+fn mean_difference(a: &Image, b: &Image, rows: std::ops::Range<usize>) -> f64 {
+    let mut sum = 0.0;
+    for y in rows.clone() {
+        for x in 0..a.width {
+            sum += (a.luminance(x, x + 1, y, y + 1) - b.luminance(x, x + 1, y, y + 1)).abs();
+        }
+    }
+    sum / (rows.len() * a.width) as f64
+}
+
+/// In the shot's static top half (ceiling, light, upper walls), frames rendered together differ
+/// from one frame to the next by at most half of what frames rendered with independent random
+/// numbers (a seed per frame) differ by.
+#[test]
+fn shared_random_numbers_halve_flicker_in_static_regions() {
+    let dir = tempfile::tempdir().unwrap();
+    let scene = bundled_scene("shot.gltf");
+    let mut s = settings(&scene, &dir.path().join("together"), 8);
+    s.frames = vec![1, 2, 3];
+    s.resolution = Some([64, 48]);
+    render_frames(&s, 2);
+    let together: Vec<Image> = s.frames.iter().map(|&f| frame_image(&s, f)).collect();
+    let independent: Vec<Image> = s
+        .frames
+        .iter()
+        .map(|&f| {
+            let alone = RenderSettings {
+                frames: vec![f],
+                seed: f as u64 + 100,
+                out_dir: dir.path().join(format!("seed{f}")),
+                ..s.clone()
+            };
+            render_frames(&alone, 2);
+            frame_image(&alone, f)
+        })
+        .collect();
+    let flicker = |images: &[Image]| (mean_difference(&images[0], &images[1], 0..24) + mean_difference(&images[1], &images[2], 0..24)) / 2.0;
+    let (shared, seeded) = (flicker(&together), flicker(&independent));
+    eprintln!("frame-to-frame difference in the static half: {shared:.5} shared, {seeded:.5} a seed per frame");
+    assert!(shared <= 0.5 * seeded, "flicker {shared} with shared numbers vs {seeded} with a seed per frame");
+}
+
+/// The same frames with 1 and 2 threads give the same bits; a memory budget too small for two
+/// frames renders them one at a time, with the same images (up to rounding).
+#[test]
+fn blocks_are_deterministic_and_follow_the_memory_budget() {
+    let dir = tempfile::tempdir().unwrap();
+    let scene = bundled_scene("shot.gltf");
+    let mut s = settings(&scene, &dir.path().join("two"), 4);
+    s.frames = vec![5, 6, 7];
+    s.resolution = Some([48, 36]);
+    assert_eq!(render_frames(&s, 2).block_frames, 3);
+    let one = RenderSettings { out_dir: dir.path().join("one"), ..s.clone() };
+    render_frames(&one, 1);
+    let small = RenderSettings { out_dir: dir.path().join("small"), memory_budget: 1 << 10, ..s.clone() };
+    assert_eq!(render_frames(&small, 2).block_frames, 1);
+    for f in [5, 6, 7] {
+        let (a, b) = (frame_image(&s, f), frame_image(&one, f));
+        assert!(a.rgb == b.rgb, "frame {f}: 1 and 2 threads differ");
+        assert_same_up_to_rounding(&frame_image(&small, f), &a, &format!("frame {f} one at a time"));
+    }
+}
