@@ -1,18 +1,63 @@
 //! `caustic bench`: passes, photon paths and rays per second with 1 and 2 threads, and peak
-//! memory, for one scene at one resolution. Figures for notes and comparisons, never for tests.
+//! memory, for one scene at one resolution; with `--frames`, a frame range rendered with and
+//! without reuse across frames at equal passes. Figures for notes and comparisons, never for tests.
 
 use std::path::Path;
 use std::time::Instant;
 
-use crate::frames::{load_description, RenderSettings, Shot};
+use crate::frames::{self, load_description, RenderReport, RenderSettings, Shot};
+use crate::memory;
 use crate::sppm::{PassStats, Renderer};
 
-/// The process's peak resident memory in MiB (Linux `VmHWM`), if known.
-fn peak_memory_mib() -> Option<f64> {
-    let status = std::fs::read_to_string("/proc/self/status").ok()?;
-    let line = status.lines().find(|l| l.starts_with("VmHWM:"))?;
-    let kib: f64 = line.split_whitespace().nth(1)?.parse().ok()?;
-    Some(kib / 1024.0)
+/// Rays of every kind in `stats`.
+fn rays(stats: PassStats) -> u64 {
+    stats.eye_rays + stats.shadow_rays + stats.photon_rays
+}
+
+/// Renders `frames` of `scene` with and without reuse across frames, `passes` passes each, and
+/// prints wall time, rays per frame and peak memory for both, and the speed-up.
+pub fn run_frames(scene: &Path, frames: Vec<i32>, passes: u64) -> Result<(), String> {
+    let out = std::env::temp_dir().join(format!("caustic-bench-{}", std::process::id()));
+    let mut settings = RenderSettings::new(scene, &out);
+    settings.frames = frames;
+    settings.passes = Some(passes);
+    let count = settings.frames.len() as f64;
+    let mut seconds = Vec::new();
+    for reuse in [true, false] {
+        settings.reuse = reuse;
+        memory::reset_peak();
+        let start = Instant::now();
+        let report: RenderReport = frames::render(&settings)?;
+        let elapsed = start.elapsed().as_secs_f64();
+        let own = report.frames.iter().fold(PassStats::default(), |a, f| a + f.stats);
+        let all = own + report.shared_stats;
+        let peak = peak_memory();
+        let mode = if reuse { "reuse" } else { "no reuse" };
+        println!(
+            "{mode}: {elapsed:.2} s ({:.3} s per frame), blocks of {} frames, peak heap memory {peak}",
+            elapsed / count,
+            report.block_frames
+        );
+        let per_frame = |n: u64| n as f64 / count;
+        println!(
+            "  per frame: {:.0} rays (eye {:.0}, shadow {:.0}, photon {:.0}), {:.0} tests against moving triangles",
+            per_frame(rays(all)),
+            per_frame(all.eye_rays),
+            per_frame(all.shadow_rays),
+            per_frame(all.photon_rays),
+            per_frame(all.moving_tests),
+        );
+        seconds.push(elapsed);
+    }
+    let _ = std::fs::remove_dir_all(&out);
+    println!("speed-up with reuse: {:.2}x", seconds[1] / seconds[0]);
+    Ok(())
+}
+
+/// The peak heap memory since the last reset, for printing.
+fn peak_memory() -> String {
+    memory::peak_mib()
+        .map_or("unknown (the counting allocator is not installed)".into(), |m| format!("{m:.1} MiB"))
 }
 
 /// Runs the benchmark and prints its figures.
@@ -52,9 +97,6 @@ pub fn run(scene_path: &Path, resolution: [u32; 2], passes: u64) -> Result<(), S
             stats.photon_rays as f64 / seconds / 1e6,
         );
     }
-    match peak_memory_mib() {
-        Some(mib) => println!("peak memory: {mib:.1} MiB"),
-        None => println!("peak memory: unknown on this platform"),
-    }
+    println!("peak heap memory: {}", peak_memory());
     Ok(())
 }

@@ -146,6 +146,10 @@ pub struct BenchArgs {
     /// Passes per measurement.
     #[arg(long, default_value_t = 8, value_parser = at_least_one)]
     passes: u64,
+    /// Instead, render these frames with and without reuse across frames at equal passes (at the
+    /// scene's resolution) and compare time, rays per frame and peak memory.
+    #[arg(long, value_name = "SPEC", value_parser = parse_frames)]
+    frames: Option<FrameList>,
 }
 
 /// Parses `s` as a `T` that `valid` accepts, or says what was `expected`.
@@ -176,15 +180,16 @@ fn thread_count(s: &str) -> Result<u64, String> {
 
 /// A size in bytes: a whole number with an optional K, M, G or T (powers of 1024).
 fn memory_size(s: &str) -> Result<u64, String> {
-    let expected = "a size like 4G, 512M or a number of bytes";
-    let (digits, shift) = match s.trim().to_ascii_uppercase().strip_suffix('B').unwrap_or(s.trim()) {
-        t if t.ends_with(['K', 'k']) => (t[..t.len() - 1].to_string(), 10),
-        t if t.ends_with(['M', 'm']) => (t[..t.len() - 1].to_string(), 20),
-        t if t.ends_with(['G', 'g']) => (t[..t.len() - 1].to_string(), 30),
-        t if t.ends_with(['T', 't']) => (t[..t.len() - 1].to_string(), 40),
-        t => (t.to_string(), 0),
+    let bad = || format!("expected a size like 4G, 512M or a number of bytes, got '{s}'");
+    let upper = s.trim().to_ascii_uppercase();
+    let number = upper.strip_suffix("IB").or(upper.strip_suffix('B')).unwrap_or(&upper);
+    let (digits, shift) = match number.char_indices().last() {
+        Some((i, unit @ ('K' | 'M' | 'G' | 'T'))) => {
+            (&number[..i], 10 * (1 + "KMGT".find(unit).unwrap_or(0)))
+        }
+        _ => (number, 0),
     };
-    let value: u64 = parse_checked(&digits, |&v: &u64| v >= 1, expected).map_err(|_| format!("expected {expected}, got '{s}'"))?;
+    let value: u64 = digits.trim().parse().ok().filter(|&v| v >= 1).ok_or_else(bad)?;
     value.checked_mul(1 << shift).ok_or_else(|| format!("'{s}' is too large"))
 }
 
@@ -284,6 +289,13 @@ pub fn run(cli: Cli) -> Result<(), String> {
                 if !report.skipped.is_empty() {
                     eprintln!("caustic: skipped {} frames already rendered (--resume)", report.skipped.len());
                 }
+                if let (Some(peak), true) = (crate::memory::peak_mib(), report.frames.len() > 1) {
+                    eprintln!(
+                        "caustic: {} frames rendered {} at a time (--memory-budget); peak memory {peak:.0} MiB",
+                        report.frames.len(),
+                        report.block_frames
+                    );
+                }
             }
             Ok(())
         }
@@ -298,7 +310,10 @@ pub fn run(cli: Cli) -> Result<(), String> {
         Command::Plot(args) => crate::plot::plot(&args.logs, &args.out),
         Command::Bench(args) => {
             let scene = args.scene.unwrap_or_else(|| PathBuf::from(DEMO_SCENE));
-            crate::bench::run(&scene, args.resolution, args.passes)
+            match args.frames {
+                Some(frames) => crate::bench::run_frames(&scene, frames.0, args.passes),
+                None => crate::bench::run(&scene, args.resolution, args.passes),
+            }
         }
     }
 }

@@ -110,8 +110,6 @@ pub struct FrameReport {
     pub frame: i32,
     /// The EXR written.
     pub path: PathBuf,
-    /// The accumulated image.
-    pub film: Film,
     /// Passes rendered.
     pub passes: u64,
     /// Wall-clock seconds for the passes.
@@ -283,7 +281,13 @@ impl Shot {
 
     /// The pose `frame` renders pass `pass` in (its `own` when it has one for all its passes);
     /// counts the poses made.
-    fn posed<'a>(&'a self, frame: i32, own: &'a Option<(Scene, Accel)>, pass: u64, poses: &mut u64) -> Posed<'a> {
+    fn posed<'a>(
+        &'a self,
+        frame: i32,
+        own: &'a Option<(Scene, Accel)>,
+        pass: u64,
+        poses: &mut u64,
+    ) -> Posed<'a> {
         match (&self.still, own) {
             (Some((scene, accel)), _) | (None, Some((scene, accel))) => Posed::Borrowed(scene, accel),
             (None, None) => {
@@ -411,8 +415,11 @@ fn render_block(
     while !active.is_empty() {
         let start = Instant::now();
         let samples = s.pass_samples(pass);
-        let poses: Vec<Posed> =
-            active.iter().zip(&own_poses).map(|(f, own)| shot.posed(f.frame, own, pass, &mut report.poses)).collect();
+        let poses: Vec<Posed> = active
+            .iter()
+            .zip(&own_poses)
+            .map(|(f, own)| shot.posed(f.frame, own, pass, &mut report.poses))
+            .collect();
         if share {
             report.shared_stats = report.shared_stats + shared_pass(shot, &poses, &samples, &mut active);
         } else {
@@ -449,7 +456,12 @@ fn render_block(
 
 /// Runs pass `samples.index` for every active frame at once, sharing paths between them; gives
 /// the work done once.
-fn shared_pass(shot: &Shot, poses: &[Posed], samples: &PassSamples, active: &mut [FrameInProgress]) -> PassStats {
+fn shared_pass(
+    shot: &Shot,
+    poses: &[Posed],
+    samples: &PassSamples,
+    active: &mut [FrameInProgress],
+) -> PassStats {
     let s = &shot.sppm;
     let (first_scene, _) = poses[0].parts();
     let fixed_accel = shot.fixed_accel();
@@ -468,7 +480,12 @@ fn shared_pass(shot: &Shot, poses: &[Posed], samples: &PassSamples, active: &mut
 }
 
 /// Adds one pass's estimates to a frame.
-fn add_pass(frame: &mut FrameInProgress, samples: &PassSamples, estimates: &[PixelEstimate], stats: PassStats) {
+fn add_pass(
+    frame: &mut FrameInProgress,
+    samples: &PassSamples,
+    estimates: &[PixelEstimate],
+    stats: PassStats,
+) {
     let sums = estimates.iter().map(|e| (e.radiance, e.laplacian));
     frame.film.add_pass(samples.lambda_nm, samples.lambda_pdf, samples.radius, sums);
     frame.stats = frame.stats + stats;
@@ -514,12 +531,18 @@ fn finish_frame(
     let bound = errors.iter().map(|e| e.bound as f32).collect();
     let variance = errors.iter().map(|e| e.variance as f32).collect();
     film.write_exr(&path, &[("Error.Y", bound), ("Variance.Y", variance)])?;
-    Progress::written(settings.progress, frame.frame, &path, film.passes, frame.elapsed_s, stopped_by.as_str());
+    Progress::written(
+        settings.progress,
+        frame.frame,
+        &path,
+        film.passes,
+        frame.elapsed_s,
+        stopped_by.as_str(),
+    );
     report.frames.push(FrameReport {
         frame: frame.frame,
         path,
         passes: film.passes,
-        film,
         elapsed_s: frame.elapsed_s,
         stats: frame.stats,
         stopped_by,

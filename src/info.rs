@@ -14,6 +14,7 @@ pub fn report(settings: &RenderSettings) -> Result<Value, String> {
     let prepared = shot.prepared();
     let (fixed, moving) = prepared.triangle_counts();
     let shutter = shot.shutter();
+    let reuse = settings.frames.len() > 1 && fixed > 0;
     let needs = json!({
         "dispersion": dispersion,
         "motion_blur": shutter.length > 0.0 && prepared.has_motion(),
@@ -21,7 +22,11 @@ pub fn report(settings: &RenderSettings) -> Result<Value, String> {
         "moving_camera": prepared.camera_moves(),
         "moving_lights": prepared.lights_move(),
         "per_time_scene": prepared.has_motion(),
-        "reuse_possible": settings.frames.len() > 1 && fixed > 0,
+        "reuse_possible": reuse,
+    });
+    let reuse_shares = json!({
+        "photon_paths": reuse,
+        "eye_paths": reuse && !prepared.camera_moves() && !prepared.lights_move(),
     });
     let mut skipped = Vec::new();
     if !prepared.has_motion() {
@@ -32,6 +37,9 @@ pub fn report(settings: &RenderSettings) -> Result<Value, String> {
     if prepared.lens().is_none() {
         skipped.push("lens sampling (no aperture: pinhole rays)");
     }
+    if !reuse {
+        skipped.push("reuse across frames (one frame, or no static triangles to share)");
+    }
     if !dispersion {
         skipped.push("wavelength-dependent refraction (no dispersive material)");
     }
@@ -41,6 +49,7 @@ pub fn report(settings: &RenderSettings) -> Result<Value, String> {
         "fps": fps,
         "shutter_frames": shutter.length,
         "needs": needs,
+        "reuse_shares": reuse_shares,
         "triangles": {"static": fixed, "moving": moving},
         "skipped": skipped,
     }))

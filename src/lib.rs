@@ -10,11 +10,13 @@
 //!        materials, lights, camera (leaves)          |
 //!                                                    v
 //!                 sppm::Renderer::run_pass(i) -> per-pixel estimates at lambda_i, time_i
+//!                 sppm::run_shared_pass(i) -> the same for a block of frames, sharing the
+//!                                             paths on static triangles (DSPPM)
 //!                                                    v
 //!                 film::Film (sums over passes) -> error (bounds) -> monitor (log, stop)
 //!                                                    v
 //!        frames (drives frames and passes, writes frame_NNNN.exr) <- cli / info / bench
-//!        plot (reads --log files), progress (bar or JSON lines)
+//!        plot (reads --log files), progress (bar or JSON lines), memory (peak heap)
 //! ```
 #![warn(missing_docs)]
 
@@ -29,6 +31,7 @@ pub mod geometry;
 pub mod info;
 pub mod lights;
 pub mod materials;
+pub mod memory;
 pub mod monitor;
 pub mod plot;
 pub mod progress;

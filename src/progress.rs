@@ -64,7 +64,7 @@ impl Progress {
     }
 
     /// Tells that the frame's EXR is written: a line on stderr, or a JSON line on stdout
-    /// (`{"frame", "written", "passes", "elapsed_s", "stopped_by"}`) that the add-on can load at once.
+    /// (`{"frame", "written", "passes", "elapsed_s", "stopped_by", "peak_memory_mib"}`) that the add-on can load at once.
     pub fn written(
         style: ProgressStyle,
         frame: i32,
@@ -77,9 +77,11 @@ impl Progress {
             ProgressStyle::Json => println!(
                 "{}",
                 serde_json::json!({"frame": frame, "written": path.display().to_string(), "passes": passes,
-                    "elapsed_s": elapsed_s, "stopped_by": stopped_by})
+                    "elapsed_s": elapsed_s, "stopped_by": stopped_by, "peak_memory_mib": crate::memory::peak_mib()})
             ),
-            ProgressStyle::Bar => eprintln!("caustic: wrote {} ({passes} passes, {elapsed_s:.1} s)", path.display()),
+            ProgressStyle::Bar => {
+                eprintln!("caustic: wrote {} ({passes} passes, {elapsed_s:.1} s)", path.display())
+            }
             ProgressStyle::None => {}
         }
     }

@@ -115,6 +115,8 @@ fn help_explains_every_flag() {
         "--seed",
         "--threads",
         "--progress",
+        "--no-reuse",
+        "--memory-budget",
     ] {
         assert!(text.contains(flag), "help does not mention {flag}");
     }
@@ -189,6 +191,33 @@ fn bad_flag_values_are_named() {
     assert_fails(&["render", scene, "--threads", "100000"], &["--threads", "1 to 256"]);
     assert_fails(&["render", scene, "--photons", "0"], &["--photons"]);
     assert_fails(&["render", scene, "--progress", "loud"], &["--progress"]);
+    assert_fails(&["render", scene, "--memory-budget", "lots"], &["--memory-budget", "4G"]);
+    assert_fails(&["render", scene, "--memory-budget", "0"], &["--memory-budget"]);
+    assert_fails(&["render", scene, "--memory-budget", "99999999999T"], &["--memory-budget", "too large"]);
+}
+
+/// `--memory-budget` takes K, M, G and T (powers of 1024), with or without B or iB.
+#[test]
+fn memory_budgets_take_units() {
+    let dir = tempfile::tempdir().unwrap();
+    let scene = bundled_scene("furnace.gltf");
+    for size in ["512M", "2g", "1GiB", "100000000", "64KB"] {
+        let output = run_caustic(&[
+            "render",
+            scene.to_str().unwrap(),
+            "-o",
+            dir.path().to_str().unwrap(),
+            "--passes",
+            "1",
+            "--resolution",
+            "4x4",
+            "--progress",
+            "none",
+            "--memory-budget",
+            size,
+        ]);
+        assert!(output.status.success(), "{size}: {}", stderr(&output));
+    }
 }
 
 #[test]

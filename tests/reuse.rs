@@ -46,7 +46,11 @@ fn assert_reuse_renders_each_frame_alone(scene: &Path, frames: &[i32], resolutio
         shared.resolution = Some(resolution);
         shared.photons = Some(4000);
         shared.seed = seed;
-        let alone = RenderSettings { reuse: false, out_dir: dir.path().join(format!("alone{seed}")), ..shared.clone() };
+        let alone = RenderSettings {
+            reuse: false,
+            out_dir: dir.path().join(format!("alone{seed}")),
+            ..shared.clone()
+        };
         block = render_frames(&shared, 2).block_frames;
         assert_eq!(render_frames(&alone, 2).block_frames, 1);
         for &frame in frames {
@@ -92,13 +96,25 @@ fn a_moving_light_renders_each_frame_as_alone() {
 fn jumping_ball_scene(dir: &Path) -> PathBuf {
     let mut gltf = GltfBuilder::default();
     let white = gltf.material(diffuse([1.0, 1.0, 1.0]));
-    let glass = gltf.material(json!({"pbrMetallicRoughness": {"baseColorFactor": [1.0, 1.0, 1.0, 1.0], "roughnessFactor": 0.0},
-        "extensions": {"KHR_materials_transmission": {"transmissionFactor": 1.0}}}));
+    let glass = gltf.material(
+        json!({"pbrMetallicRoughness": {"baseColorFactor": [1.0, 1.0, 1.0, 1.0], "roughnessFactor": 0.0},
+        "extensions": {"KHR_materials_transmission": {"transmissionFactor": 1.0}}}),
+    );
     gltf.quad_y("Floor", 0.0, 6.0, true, white);
     gltf.sphere("Ball", [0.0, 0.0, 0.0], 0.5, 48, glass);
     let ball = gltf.last_node();
-    gltf.animate(ball, "translation", &[0.0, 1.5 / 24.0], &[vec![-1.2, 1.0, 0.0], vec![1.2, 1.0, 0.0]], "STEP");
-    gltf.light(json!({"type": "point", "intensity": 4.0 * std::f32::consts::PI * 683.0}), [0.0, 4.0, 0.0], [0.0, -1.0, 0.0]);
+    gltf.animate(
+        ball,
+        "translation",
+        &[0.0, 1.5 / 24.0],
+        &[vec![-1.2, 1.0, 0.0], vec![1.2, 1.0, 0.0]],
+        "STEP",
+    );
+    gltf.light(
+        json!({"type": "point", "intensity": 4.0 * std::f32::consts::PI * 683.0}),
+        [0.0, 4.0, 0.0],
+        [0.0, -1.0, 0.0],
+    );
     gltf.camera_with_aspect([0.0, 5.0, 6.0], [0.0, -5.0, -6.0], 0.6, 1.5);
     gltf.scene_extras(json!({"fps": 24.0, "resolution": [96, 64]}));
     gltf.write(dir, "jumping_ball")
@@ -119,7 +135,8 @@ fn pixels_near(scene: &Scene, image: &Image, centre: Vec3, radius: f32) -> Vec<(
     let mut found = Vec::new();
     for y in 0..image.height {
         for x in 0..image.width {
-            let film = Vec2::new((x as f32 + 0.5) / image.width as f32, (y as f32 + 0.5) / image.height as f32);
+            let film =
+                Vec2::new((x as f32 + 0.5) / image.width as f32, (y as f32 + 0.5) / image.height as f32);
             let (origin, direction) = scene.camera.ray(film, aspect);
             let p = origin - direction * (origin.y / direction.y);
             let d = p.distance(centre);
@@ -166,7 +183,10 @@ fn shadow_and_caustic_move_with_the_object_and_leave_no_stale_photons() {
         let (caustic, bare_core) = measured_and_bare(&scene, &with_ball, &core);
         eprintln!("frame {lit}: shadow rim {shadow:.4} (bare {bare_rim:.4}), caustic core {caustic:.4} (bare {bare_core:.4})");
         assert!(shadow < 0.5 * bare_rim, "frame {lit}: no shadow under the ball ({shadow} vs {bare_rim})");
-        assert!(caustic > 2.0 * bare_core, "frame {lit}: no caustic under the ball ({caustic} vs {bare_core})");
+        assert!(
+            caustic > 2.0 * bare_core,
+            "frame {lit}: no caustic under the ball ({caustic} vs {bare_core})"
+        );
     }
 }
 
@@ -207,9 +227,14 @@ fn shared_random_numbers_halve_flicker_in_static_regions() {
             frame_image(&alone, f)
         })
         .collect();
-    let flicker = |images: &[Image]| (mean_difference(&images[0], &images[1], 0..24) + mean_difference(&images[1], &images[2], 0..24)) / 2.0;
+    let flicker = |images: &[Image]| {
+        (mean_difference(&images[0], &images[1], 0..24) + mean_difference(&images[1], &images[2], 0..24))
+            / 2.0
+    };
     let (shared, seeded) = (flicker(&together), flicker(&independent));
-    eprintln!("frame-to-frame difference in the static half: {shared:.5} shared, {seeded:.5} a seed per frame");
+    eprintln!(
+        "frame-to-frame difference in the static half: {shared:.5} shared, {seeded:.5} a seed per frame"
+    );
     assert!(shared <= 0.5 * seeded, "flicker {shared} with shared numbers vs {seeded} with a seed per frame");
 }
 
@@ -231,5 +256,31 @@ fn blocks_are_deterministic_and_follow_the_memory_budget() {
         let (a, b) = (frame_image(&s, f), frame_image(&one, f));
         assert!(a.rgb == b.rgb, "frame {f}: 1 and 2 threads differ");
         assert_same_up_to_rounding(&frame_image(&small, f), &a, &format!("frame {f} one at a time"));
+    }
+}
+
+/// Frames rendered together stop one by one: each at its own target error (the block goes on
+/// without it), each written with the passes it took, and the same frame rendered alone stops
+/// after the same passes.
+#[test]
+fn frames_in_a_block_stop_at_their_own_target_error() {
+    let dir = tempfile::tempdir().unwrap();
+    let scene = bundled_scene("shot.gltf");
+    let mut s = settings(&scene, &dir.path().join("together"), 0);
+    s.passes = None;
+    s.frames = vec![1, 24];
+    s.resolution = Some([32, 24]);
+    s.errors.target = Some((0.3, caustic::error::Statistic::Mean));
+    let together = render_frames(&s, 2);
+    assert_eq!(together.block_frames, 2);
+    for report in &together.frames {
+        assert_eq!(report.stopped_by, caustic::monitor::StopReason::TargetError, "frame {}", report.frame);
+        assert!(report.error.mean <= 0.3, "frame {}: {}", report.frame, report.error.mean);
+        let alone = RenderSettings {
+            frames: vec![report.frame],
+            out_dir: dir.path().join(format!("alone{}", report.frame)),
+            ..s.clone()
+        };
+        assert_eq!(render_frames(&alone, 2).frames[0].passes, report.passes, "frame {}", report.frame);
     }
 }

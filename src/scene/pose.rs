@@ -106,7 +106,8 @@ fn swept_bounds(description: &Description, mesh: &MeshInstance, range: TimeRange
     let (lo, hi) = mesh.positions.iter().fold((first, first), |(lo, hi), &p| (lo.min(p), hi.max(p)));
     let corners: Vec<Vec3> =
         (0..8).map(|k| Vec3::select(glam::BVec3::new(k & 1 != 0, k & 2 != 0, k & 4 != 0), hi, lo)).collect();
-    let times = (0..=SWEEP_SAMPLES).map(|i| range.start + (range.end - range.start) * i as f32 / SWEEP_SAMPLES as f32);
+    let times = (0..=SWEEP_SAMPLES)
+        .map(|i| range.start + (range.end - range.start) * i as f32 / SWEEP_SAMPLES as f32);
     let posed = times.flat_map(|t| {
         let world = description.rig.world(mesh.node, t);
         corners.iter().map(move |&c| world.transform_point3(c))
@@ -157,7 +158,8 @@ impl Prepared {
         fixed_lights.extend(emitters);
         // Distant lights aim their photons at one sphere for the whole range, so that a photon
         // path from the sun is the same in every frame (reuse across frames).
-        let swept = moving_meshes.iter().filter_map(|&m| swept_bounds(&description, &description.meshes[m], range));
+        let swept =
+            moving_meshes.iter().filter_map(|&m| swept_bounds(&description, &description.meshes[m], range));
         let sphere = bounding_sphere(fixed.bounds().into_iter().chain(swept));
         Prepared {
             camera_moves: moves(description.camera.node),

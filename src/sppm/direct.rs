@@ -137,7 +137,8 @@ impl DirectLight<'_> {
         let surface = scene.surface(hit.triangle, hit.barycentric);
         let material = &scene.materials[surface.material as usize];
         let radiance = material.emitted(lambda_nm, surface.frame.ng, -sample.wi);
-        let value = sample.weight * radiance * power_heuristic(sample.pdf, light_pdf(light as usize, surface.p));
+        let value =
+            sample.weight * radiance * power_heuristic(sample.pdf, light_pdf(light as usize, surface.p));
         DirectTerm { value, ray }
     }
 }

@@ -15,50 +15,75 @@ use super::grid::PhotonGrid;
 use super::visible::EyeResult;
 use super::{Photon, PixelEstimate, VisiblePoint};
 
+/// The biweight kernel of one radius and its Laplacian.
+#[derive(Clone, Copy)]
+struct Kernel {
+    r2: f32,
+    scale: f32,
+    laplacian_scale: f32,
+}
+
+impl Kernel {
+    fn new(radius: f32) -> Self {
+        let r2 = radius * radius;
+        let scale = 3.0 / (PI * r2);
+        Kernel { r2, scale, laplacian_scale: -8.0 * scale / r2 }
+    }
+
+    /// What `photon` adds at `vp` (kernel-weighted reflected flux, and the same with the
+    /// Laplacian), or `None` when it is out of reach or on the other side.
+    fn weigh(&self, photon: &Photon, vp: &VisiblePoint) -> Option<[f32; 2]> {
+        let d2 = photon.p.distance_squared(vp.p);
+        if d2 >= self.r2 || photon.ng.dot(vp.frame.ng) * vp.frame.ng.dot(vp.wo) <= 0.0 {
+            return None;
+        }
+        let t2 = d2 / self.r2;
+        let weighted = photon.flux * vp.bsdf.eval(vp.frame.n, vp.wo, photon.wi);
+        Some([
+            weighted * self.scale * (1.0 - t2) * (1.0 - t2),
+            weighted * self.laplacian_scale * (1.0 - 2.0 * t2),
+        ])
+    }
+}
+
+/// The box around `points` grown by `radius` (`None` when there are none).
+fn reach(points: impl Iterator<Item = Vec3>, radius: f32) -> Option<(Vec3, Vec3)> {
+    let (lo, hi) = points.map(|p| (p, p)).reduce(|(a, b), (c, d)| (a.min(c), b.max(d)))?;
+    Some((lo - Vec3::splat(radius), hi + Vec3::splat(radius)))
+}
+
+fn within((lo, hi): (Vec3, Vec3), p: Vec3) -> bool {
+    !(p.cmplt(lo).any() || p.cmpgt(hi).any())
+}
+
 /// Photons bucketed for gathering at one radius.
 pub struct PhotonSet<'a> {
     photons: &'a [Photon],
     grid: PhotonGrid,
-    /// The box around the photons grown by the radius (`None` when there are none).
     reach: Option<(Vec3, Vec3)>,
-    r2: f32,
+    kernel: Kernel,
 }
 
 impl<'a> PhotonSet<'a> {
     /// Buckets `photons` for gathers of radius `radius`.
     pub fn new(photons: &'a [Photon], radius: f32) -> Self {
         let grid = PhotonGrid::build(photons.iter().map(|p| p.p), photons.len(), radius);
-        let reach = photons
-            .iter()
-            .map(|p| (p.p, p.p))
-            .reduce(|(a, b), (c, d)| (a.min(c), b.max(d)))
-            .map(|(lo, hi)| (lo - Vec3::splat(radius), hi + Vec3::splat(radius)));
-        PhotonSet { photons, grid, reach, r2: radius * radius }
+        let reach = reach(photons.iter().map(|p| p.p), radius);
+        PhotonSet { photons, grid, reach, kernel: Kernel::new(radius) }
     }
 
     /// The kernel-weighted sum of the photons' reflected flux at `vp`, and the same with the
     /// kernel's Laplacian, before the path throughput.
     pub fn sum_at(&self, vp: &VisiblePoint) -> [f32; 2] {
-        let Some((lo, hi)) = self.reach else { return [0.0; 2] };
-        if vp.p.cmplt(lo).any() || vp.p.cmpgt(hi).any() {
-            return [0.0; 2];
+        let mut sums = [0.0f32; 2];
+        if self.reach.is_some_and(|r| within(r, vp.p)) {
+            self.grid.for_each_near(vp.p, |i| {
+                if let Some([k, l]) = self.kernel.weigh(&self.photons[i], vp) {
+                    sums = [sums[0] + k, sums[1] + l];
+                }
+            });
         }
-        let r2 = self.r2;
-        let kernel_scale = 3.0 / (PI * r2);
-        let laplacian_scale = -8.0 * kernel_scale / r2;
-        let (mut sum, mut laplacian) = (0.0f32, 0.0f32);
-        self.grid.for_each_near(vp.p, |i| {
-            let photon = &self.photons[i];
-            let d2 = photon.p.distance_squared(vp.p);
-            if d2 >= r2 || photon.ng.dot(vp.frame.ng) * vp.frame.ng.dot(vp.wo) <= 0.0 {
-                return;
-            }
-            let t2 = d2 / r2;
-            let weighted = photon.flux * vp.bsdf.eval(vp.frame.n, vp.wo, photon.wi);
-            sum += weighted * kernel_scale * (1.0 - t2) * (1.0 - t2);
-            laplacian += weighted * laplacian_scale * (1.0 - 2.0 * t2);
-        });
-        [sum, laplacian]
+        sums
     }
 }
 

@@ -22,7 +22,9 @@ use rayon::prelude::*;
 
 use super::gather::{estimate, PhotonSet};
 use super::photons::{continue_photon, start_photon, trace_photon, PhotonState};
-use super::visible::{continue_eye_path, start_eye_path, trace_eye_path, with_direct, EyeEnd, EyeResult, EyeState};
+use super::visible::{
+    continue_eye_path, start_eye_path, trace_eye_path, with_direct, EyeEnd, EyeResult, EyeState,
+};
 use super::{PassSamples, PassStats, Photon, PixelEstimate, Renderer};
 use crate::geometry::ray_meets_box;
 
@@ -186,10 +188,12 @@ fn trace_shared_photons(statics: &Renderer, pass: &PassSamples, swept: Swept) ->
     let mut stats = PassStats::default();
     for (traced, chunk_stats) in chunks {
         let offset = shared.photons.len();
-        shared.records.extend(traced.records.into_iter().map(|r| PathRecord {
-            photons: r.photons.start + offset..r.photons.end + offset,
-            ..r
-        }));
+        shared.records.extend(
+            traced
+                .records
+                .into_iter()
+                .map(|r| PathRecord { photons: r.photons.start + offset..r.photons.end + offset, ..r }),
+        );
         shared.photons.extend(traced.photons);
         stats = stats + chunk_stats;
     }
@@ -292,7 +296,8 @@ fn trace_shared_eyes(statics: &Renderer, pass: &PassSamples, swept: Swept) -> (V
                     watched.push(Watched { state: state.clone(), t_hit, stored_before: 0 });
                 }
             });
-            let direct_watched = end.direct.map(|t| t.ray.is_some_and(|r| swept.meets(r.origin, r.direction, r.t_max)));
+            let direct_watched =
+                end.direct.map(|t| t.ray.is_some_and(|r| swept.meets(r.origin, r.direction, r.t_max)));
             (EyeRecord { end, watched, direct_watched }, start_stats + stats)
         })
         .collect();

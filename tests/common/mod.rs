@@ -224,8 +224,12 @@ impl GltfBuilder {
         let (mut positions, mut normals) = (Vec::new(), Vec::new());
         for ring in 0..rings {
             for segment in 0..2 * rings {
-                let [a, b, c, d] =
-                    [point(ring, segment), point(ring + 1, segment), point(ring + 1, segment + 1), point(ring, segment + 1)];
+                let [a, b, c, d] = [
+                    point(ring, segment),
+                    point(ring + 1, segment),
+                    point(ring + 1, segment + 1),
+                    point(ring, segment + 1),
+                ];
                 // The first ring's second triangle and the last ring's first meet at a pole.
                 let first = if ring + 1 < rings { &[a, c, b][..] } else { &[][..] };
                 let second = if ring > 0 { &[a, d, c][..] } else { &[][..] };
