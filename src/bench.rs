@@ -29,7 +29,7 @@ pub fn run_frames(scene: &Path, frames: Vec<i32>, passes: u64) -> Result<(), Str
         let start = Instant::now();
         let report: RenderReport = frames::render(&settings)?;
         let elapsed = start.elapsed().as_secs_f64();
-        let own = report.frames.iter().fold(PassStats::default(), |a, f| a + f.stats);
+        let own = report.frames.iter().map(|f| f.stats).sum::<PassStats>();
         let all = own + report.shared_stats;
         let peak = peak_memory();
         let mode = if reuse { "reuse" } else { "no reuse" };
@@ -82,8 +82,7 @@ pub fn run(scene_path: &Path, resolution: [u32; 2], passes: u64) -> Result<(), S
     for threads in [1, 2] {
         let pool = rayon::ThreadPoolBuilder::new().num_threads(threads).build().map_err(|e| e.to_string())?;
         let start = Instant::now();
-        let stats =
-            pool.install(|| (0..passes).fold(PassStats::default(), |sum, i| sum + renderer.run_pass(i).2));
+        let stats = pool.install(|| (0..passes).map(|i| renderer.run_pass(i).2).sum::<PassStats>());
         let seconds = start.elapsed().as_secs_f64();
         let rays = stats.eye_rays + stats.shadow_rays + stats.photon_rays;
         let photon_paths = passes * renderer.settings().photons_per_pass as u64;

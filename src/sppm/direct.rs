@@ -4,7 +4,7 @@
 
 use glam::Vec3;
 
-use super::{PassStats, Renderer, VisiblePoint};
+use super::renderer::{PassStats, Renderer, VisiblePoint};
 use crate::geometry::offset_origin;
 use crate::materials::{ShadingFrame, Transport};
 use crate::sampling::Sampler;

@@ -12,8 +12,9 @@ use rayon::prelude::*;
 use std::f32::consts::PI;
 
 use super::grid::PhotonGrid;
+use super::photons::Photon;
+use super::renderer::{PixelEstimate, VisiblePoint};
 use super::visible::EyeResult;
-use super::{Photon, PixelEstimate, VisiblePoint};
 
 /// The biweight kernel of one radius and its Laplacian.
 #[derive(Clone, Copy)]

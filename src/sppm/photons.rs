@@ -8,7 +8,9 @@
 
 use glam::Vec3;
 
-use super::{PassSamples, PassStats, Renderer, MAX_DEPTH};
+use rayon::prelude::*;
+
+use super::renderer::{PassSamples, PassStats, Renderer, MAX_DEPTH};
 use crate::geometry::offset_origin;
 use crate::materials::Transport;
 use crate::sampling::{stream, Sampler, Stream};
@@ -39,6 +41,15 @@ pub struct PhotonState {
     pub depth: u32,
     /// The path's random stream, where this segment leaves it.
     pub rng: Sampler,
+}
+
+/// Photon paths traced together by one task.
+const CHUNK: usize = 1024;
+
+/// The photon paths `0..count` in chunks for parallel tasks, in order.
+pub fn photon_chunks(count: usize) -> impl IndexedParallelIterator<Item = std::ops::Range<u64>> {
+    let chunk_paths = move |chunk: usize| (chunk * CHUNK) as u64..((chunk + 1) * CHUNK).min(count) as u64;
+    (0..count.div_ceil(CHUNK)).into_par_iter().map(chunk_paths)
 }
 
 /// Photon path `k` of `pass` as it leaves its light, and the index of that light; `None` when no

@@ -21,15 +21,12 @@ use glam::Vec3;
 use rayon::prelude::*;
 
 use super::gather::{estimate, PhotonSet};
-use super::photons::{continue_photon, start_photon, trace_photon, PhotonState};
+use super::photons::{continue_photon, photon_chunks, start_photon, trace_photon, Photon, PhotonState};
+use super::renderer::{PassSamples, PassStats, PixelEstimate, Renderer};
 use super::visible::{
     continue_eye_path, start_eye_path, trace_eye_path, with_direct, EyeEnd, EyeResult, EyeState,
 };
-use super::{PassSamples, PassStats, Photon, PixelEstimate, Renderer};
 use crate::geometry::ray_meets_box;
-
-/// Photon paths traced together by one task.
-const CHUNK: usize = 1024;
 
 /// The box every frame's moving triangles lie in this pass, grown a little for rounding.
 #[derive(Clone, Copy)]
@@ -162,7 +159,7 @@ pub fn run_shared_pass(
                 (estimate(&eye, sums), eye_stats)
             })
             .collect();
-        let frame_stats = results.iter().fold(*photon_stats, |a, (_, s)| a + *s);
+        let frame_stats = *photon_stats + results.iter().map(|(_, s)| *s).sum();
         let estimates = results.into_iter().map(|(e, _)| e).collect();
         consume(SharedPassOutput { frame: index, estimates, stats: frame_stats });
     }
@@ -172,15 +169,10 @@ pub fn run_shared_pass(
 /// Traces every photon path of `pass` against the static triangles, keeping the segments that
 /// meet the swept box.
 fn trace_shared_photons(statics: &Renderer, pass: &PassSamples, swept: Swept) -> (SharedPhotons, PassStats) {
-    let count = statics.settings.photons_per_pass;
-    let chunks: Vec<(SharedPhotons, PassStats)> = (0..count.div_ceil(CHUNK))
-        .into_par_iter()
-        .map(|chunk| {
+    let chunks: Vec<(SharedPhotons, PassStats)> = photon_chunks(statics.settings.photons_per_pass)
+        .map(|paths| {
             let mut traced = SharedPhotons { photons: Vec::new(), records: Vec::new() };
-            let mut stats = PassStats::default();
-            for path in (chunk * CHUNK..((chunk + 1) * CHUNK).min(count)).map(|k| k as u64) {
-                stats = stats + trace_shared_photon(statics, pass, path, swept, &mut traced);
-            }
+            let stats = paths.map(|path| trace_shared_photon(statics, pass, path, swept, &mut traced)).sum();
             (traced, stats)
         })
         .collect();
@@ -253,7 +245,7 @@ fn check_photons(frame: &Renderer, pass: &PassSamples, shared: &SharedPhotons) -
             (record.photons.len(), own, stats)
         })
         .collect();
-    let stats = checked.iter().fold(PassStats::default(), |a, (_, _, s)| a + *s);
+    let stats = checked.iter().map(|(_, _, s)| *s).sum();
     let (valid, own) = checked.into_iter().map(|(v, o, _)| (v, o)).unzip();
     (FramePhotons { valid, own }, stats)
 }
@@ -301,7 +293,7 @@ fn trace_shared_eyes(statics: &Renderer, pass: &PassSamples, swept: Swept) -> (V
             (EyeRecord { end, watched, direct_watched }, start_stats + stats)
         })
         .collect();
-    let stats = records.iter().fold(PassStats::default(), |a, (_, s)| a + *s);
+    let stats = records.iter().map(|(_, s)| *s).sum();
     (records.into_iter().map(|(r, _)| r).collect(), stats)
 }
 

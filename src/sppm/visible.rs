@@ -8,7 +8,7 @@
 use glam::{Vec2, Vec3};
 
 use super::direct::{DirectLight, DirectTerm};
-use super::{PassSamples, PassStats, Renderer, VisiblePoint, MAX_DEPTH};
+use super::renderer::{PassSamples, PassStats, Renderer, VisiblePoint, MAX_DEPTH};
 use crate::geometry::offset_origin;
 use crate::materials::{Bsdf, Transport};
 use crate::sampling::{stream, Sampler, Stream};

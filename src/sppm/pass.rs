@@ -1,0 +1,44 @@
+//! One whole pass for one frame (DESIGN.md steps 1 to 4): its samples, the eye pass, the photon
+//! pass and the gather.
+
+use rayon::prelude::*;
+
+use super::gather::gather;
+use super::photons::{photon_chunks, trace_photon, Photon};
+use super::renderer::{PassSamples, PassStats, PixelEstimate, Renderer};
+use super::visible::{trace_eye_path, EyeResult};
+
+impl Renderer<'_> {
+    /// Renders pass `index`: one estimate per pixel, in row-major order.
+    pub fn run_pass(&self, index: u64) -> (PassSamples, Vec<PixelEstimate>, PassStats) {
+        let pass = self.pass_samples(index);
+        let (points, eye_stats) = self.trace_visible_points(&pass);
+        let (photons, photon_stats) = self.trace_photons(&pass);
+        let estimates = gather(&points, &photons, pass.radius);
+        (pass, estimates, eye_stats + photon_stats)
+    }
+
+    fn trace_visible_points(&self, pass: &PassSamples) -> (Vec<EyeResult>, PassStats) {
+        let width = self.settings.width as usize;
+        let pixels = width * self.settings.height as usize;
+        let results: Vec<(EyeResult, PassStats)> = (0..pixels)
+            .into_par_iter()
+            .with_min_len(64)
+            .map(|pixel| trace_eye_path(self, pass, pixel))
+            .collect();
+        let stats = results.iter().map(|(_, s)| *s).sum();
+        (results.into_iter().map(|(r, _)| r).collect(), stats)
+    }
+
+    fn trace_photons(&self, pass: &PassSamples) -> (Vec<Photon>, PassStats) {
+        let chunks: Vec<(Vec<Photon>, PassStats)> = photon_chunks(self.settings.photons_per_pass)
+            .map(|paths| {
+                let mut photons = Vec::new();
+                let stats = paths.map(|k| trace_photon(self, pass, k, &mut photons)).sum();
+                (photons, stats)
+            })
+            .collect();
+        let stats = chunks.iter().map(|(_, s)| *s).sum();
+        (chunks.into_iter().flat_map(|(p, _)| p).collect(), stats)
+    }
+}

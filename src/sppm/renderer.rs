@@ -1,0 +1,154 @@
+//! What every stage of a pass reads: the settings, the pass's shared samples, the renderer (the
+//! scene, its BVHs and how lights are chosen), and what a pass produces and counts.
+
+use glam::Vec3;
+
+use crate::accel::Accel;
+use crate::lights::Light;
+use crate::materials::{Bsdf, ShadingFrame};
+use crate::sampling::{pass_sample, Distribution1D};
+use crate::scene::Scene;
+use crate::spectrum::sample_visible_wavelength;
+
+use super::radius;
+
+/// Longest path (bounces) an eye path follows through delta surfaces, and a photon overall.
+pub const MAX_DEPTH: u32 = 32;
+
+/// Where a pixel's camera path met its first non-delta surface.
+#[derive(Clone, Copy, Debug)]
+pub struct VisiblePoint {
+    /// Position.
+    pub p: Vec3,
+    /// Normals there.
+    pub frame: ShadingFrame,
+    /// Unit direction back along the path.
+    pub wo: Vec3,
+    /// The BSDF at the pass wavelength.
+    pub bsdf: Bsdf,
+    /// Path throughput from the camera to here.
+    pub beta: f32,
+}
+
+/// Settings of the SPPM passes.
+#[derive(Clone, Debug)]
+pub struct SppmSettings {
+    /// Image width in pixels.
+    pub width: u32,
+    /// Image height in pixels.
+    pub height: u32,
+    /// Photon paths traced per pass.
+    pub photons_per_pass: usize,
+    /// Knaus & Zwicker's alpha in (0, 1).
+    pub alpha: f64,
+    /// The first pass's gather radius, in scene units.
+    pub initial_radius: f64,
+    /// The random seed.
+    pub seed: u64,
+    /// Render every pass at this wavelength instead of sampling one per pass.
+    pub fixed_wavelength_nm: Option<f32>,
+}
+
+impl SppmSettings {
+    /// The wavelength and radius of pass `index` (0-based).
+    pub fn pass_samples(&self, index: u64) -> PassSamples {
+        let (lambda_nm, lambda_pdf) = match self.fixed_wavelength_nm {
+            Some(lambda_nm) => (lambda_nm, 1.0),
+            None => sample_visible_wavelength(pass_sample(self.seed, index)),
+        };
+        let r1_squared = self.initial_radius * self.initial_radius;
+        let radius = radius::radius_squared(r1_squared, self.alpha, index + 1).sqrt() as f32;
+        PassSamples { index, lambda_nm, lambda_pdf, radius }
+    }
+}
+
+/// What pass `i` shares between all its pixels and photons (DESIGN.md step 1).
+#[derive(Clone, Copy, Debug)]
+pub struct PassSamples {
+    /// The pass index, from 0.
+    pub index: u64,
+    /// The pass wavelength.
+    pub lambda_nm: f32,
+    /// Its density per nanometre.
+    pub lambda_pdf: f32,
+    /// The gather radius.
+    pub radius: f32,
+}
+
+/// One pixel's estimate for one pass, at the pass wavelength.
+#[derive(Clone, Copy, Debug, Default)]
+pub struct PixelEstimate {
+    /// Spectral radiance.
+    pub radiance: f32,
+    /// The same estimate with the kernel's Laplacian in place of the kernel (for the bias term).
+    pub laplacian: f32,
+}
+
+/// Counts of the work a pass did, for the benchmark.
+#[derive(Clone, Copy, Debug, Default)]
+pub struct PassStats {
+    /// Rays from the camera, delta bounces included.
+    pub eye_rays: u64,
+    /// Shadow rays of next-event estimation.
+    pub shadow_rays: u64,
+    /// Rays along photon paths.
+    pub photon_rays: u64,
+    /// Photons stored for gathering.
+    pub photons_stored: u64,
+    /// Points drawn on the camera's aperture (zero for a pinhole).
+    pub lens_samples: u64,
+    /// Segments of shared paths tested against a frame's moving triangles (reuse across frames).
+    pub moving_tests: u64,
+}
+
+impl std::iter::Sum for PassStats {
+    fn sum<I: Iterator<Item = PassStats>>(iter: I) -> PassStats {
+        iter.fold(PassStats::default(), |a, b| a + b)
+    }
+}
+
+impl std::ops::Add for PassStats {
+    type Output = PassStats;
+    fn add(self, o: PassStats) -> PassStats {
+        PassStats {
+            eye_rays: self.eye_rays + o.eye_rays,
+            shadow_rays: self.shadow_rays + o.shadow_rays,
+            photon_rays: self.photon_rays + o.photon_rays,
+            photons_stored: self.photons_stored + o.photons_stored,
+            lens_samples: self.lens_samples + o.lens_samples,
+            moving_tests: self.moving_tests + o.moving_tests,
+        }
+    }
+}
+
+/// Everything a pass reads: the scene, its BVH, how lights are chosen, and the settings.
+pub struct Renderer<'a> {
+    pub(super) scene: &'a Scene,
+    pub(super) accel: &'a Accel,
+    pub(super) light_choice: Distribution1D,
+    pub(super) settings: SppmSettings,
+}
+
+impl<'a> Renderer<'a> {
+    /// A renderer for `scene`; lights are chosen in proportion to their power.
+    pub fn new(scene: &'a Scene, accel: &'a Accel, settings: SppmSettings) -> Self {
+        let light_choice = Distribution1D::new(scene.lights.iter().map(Light::power));
+        Renderer { scene, accel, light_choice, settings }
+    }
+
+    /// A renderer for `scene` that chooses lights as `other` does (frames that share photon
+    /// paths must choose their lights alike).
+    pub fn choosing_lights_as(other: &Renderer, scene: &'a Scene, accel: &'a Accel) -> Self {
+        Renderer { scene, accel, light_choice: other.light_choice.clone(), settings: other.settings.clone() }
+    }
+
+    /// The settings.
+    pub fn settings(&self) -> &SppmSettings {
+        &self.settings
+    }
+
+    /// The wavelength and radius of pass `index` (0-based).
+    pub fn pass_samples(&self, index: u64) -> PassSamples {
+        self.settings.pass_samples(index)
+    }
+}
