@@ -175,6 +175,30 @@ fn a_bad_extras_field_is_named() {
     assert_fails(&["render", path.to_str().unwrap()], &["furnace.gltf", "resolutoin"]);
 }
 
+/// A scene that names a camera node renders through it; naming a node without a camera is an error.
+#[test]
+fn the_scene_chooses_its_camera_by_name() {
+    let dir = tempfile::tempdir().unwrap();
+    let mut gltf = GltfBuilder::default();
+    let red = gltf.material(diffuse([0.8, 0.1, 0.1]));
+    gltf.quad_y("Floor", 0.0, 5.0, true, red);
+    gltf.light(serde_json::json!({"type": "point", "intensity": 5000.0}), [0.0, 3.0, 0.0], [0.0, -1.0, 0.0]);
+    gltf.camera([0.0, 2.0, 0.0], [0.0, -1.0, 0.0], 0.5);
+    gltf.camera([0.0, 2.0, 0.0], [0.0, 1.0, 0.0], 0.5);
+    let mut doc = gltf.to_json();
+    let up = doc["nodes"].as_array().unwrap().len() - 1;
+    doc["nodes"][up]["name"] = "LookingUp".into();
+    doc["scenes"][0]["extras"] = serde_json::json!({"caustic": {"camera": "LookingUp", "resolution": [4, 4]}});
+    let path = dir.path().join("two_cameras.gltf");
+    std::fs::write(&path, doc.to_string()).unwrap();
+    let mut s = settings(&path, &dir.path().join("up"), 4);
+    s.resolution = Some([4, 4]);
+    assert!(render(&s, 1).mean_all()[0] < 1e-6, "the camera looking up sees the floor");
+    doc["scenes"][0]["extras"]["caustic"]["camera"] = "Floor".into();
+    std::fs::write(&path, doc.to_string()).unwrap();
+    assert_fails(&["render", path.to_str().unwrap()], &["caustic.camera", "'Floor'", "not a camera"]);
+}
+
 #[test]
 fn bad_flag_values_are_named() {
     let scene = bundled_scene("furnace.gltf");

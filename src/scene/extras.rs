@@ -26,6 +26,8 @@ pub struct SceneExtras {
     pub fps: Option<f32>,
     /// The motion-blur shutter (absent: no motion blur).
     pub shutter: Option<ShutterExtras>,
+    /// The name of the camera's node to render through (absent: the first camera).
+    pub camera: Option<String>,
 }
 
 /// Blender's motion-blur shutter.

@@ -5,7 +5,7 @@
 //! Reads the default scene's node tree (nested transforms), triangle meshes with normals and
 //! texture coordinates, metallic-roughness materials with `KHR_materials_transmission`,
 //! `KHR_materials_ior` (absent means 1.5) and `KHR_materials_emissive_strength`,
-//! `KHR_materials_dispersion`, `KHR_lights_punctual`, the first perspective camera, and the
+//! `KHR_materials_dispersion`, `KHR_lights_punctual`, the perspective camera the scene names (else the first), and the
 //! extras schema in [`super::extras`].
 
 use std::path::Path;
@@ -39,6 +39,8 @@ struct Builder<'a> {
     meshes: Vec<MeshInstance>,
     lights: Vec<PunctualLight>,
     camera: Option<CameraInstance>,
+    /// The camera node the scene names, if it names one.
+    wanted_camera: Option<String>,
     warnings: Vec<String>,
     material_offset: u32,
 }
@@ -67,6 +69,7 @@ pub fn load(path: &Path) -> Result<Description, SceneError> {
         meshes: Vec::new(),
         lights: Vec::new(),
         camera: None,
+        wanted_camera: scene_extras.camera.clone(),
         warnings: Vec::new(),
         material_offset,
     };
@@ -74,8 +77,12 @@ pub fn load(path: &Path) -> Result<Description, SceneError> {
         builder.visit(&node, &rig).map_err(fail)?;
     }
     let world = scene_extras.world.as_ref().map(|w| world(w, path)).transpose().map_err(fail)?;
-    let camera =
-        builder.camera.ok_or_else(|| fail("the scene has no camera: add a perspective camera".into()))?;
+    let camera = builder.camera.ok_or_else(|| {
+        fail(match &scene_extras.camera {
+            Some(name) => format!("scene extras `caustic.camera` names node '{name}', which is not a camera"),
+            None => "the scene has no camera: add a perspective camera".into(),
+        })
+    })?;
     let fps = scene_extras.fps.unwrap_or(24.0);
     if !(fps > 0.0 && fps.is_finite()) {
         return Err(fail(format!("scene extras `caustic.fps`: expected a positive frame rate, got {fps}")));
@@ -246,9 +253,13 @@ impl Builder<'_> {
         name: &str,
         lens: Option<&LensExtras>,
     ) -> Result<(), String> {
-        if self.camera.is_some() {
-            self.warnings.push(format!("camera node '{name}' ignored: the first camera is used"));
-            return Ok(());
+        match &self.wanted_camera {
+            Some(wanted) if wanted != name => return Ok(()),
+            None if self.camera.is_some() => {
+                self.warnings.push(format!("camera node '{name}' ignored: the first camera is used"));
+                return Ok(());
+            }
+            _ => {}
         }
         let gltf::camera::Projection::Perspective(p) = camera.projection() else {
             return Err(format!(

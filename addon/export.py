@@ -1,0 +1,187 @@
+"""The scene as glTF 2.0 through Blender's own exporter, plus what the exporter drops, written into
+the `caustic` extras (docs/extras.md) by the exporter's hooks while Caustic exports: area lights,
+the sun's angle, the camera's depth of field, the shutter, the frame rate, the resolution (with its
+percentage), the active camera, the world's colour and dispersion.
+
+The hooks change nothing in the user's data: they only add extras to what is being written.
+"""
+
+import math
+import time
+
+import bpy
+
+# True only while Caustic exports: the hooks stay out of the user's own glTF exports.
+_exporting = False
+
+
+def resolution(scene):
+    """The render size in pixels, with Blender's percentage applied."""
+    r = scene.render
+    scale = r.resolution_percentage / 100.0
+    return [max(1, round(r.resolution_x * scale)), max(1, round(r.resolution_y * scale))]
+
+
+def world_extras(world):
+    """A uniform world: the Background node's colour and strength (or the world's colour)."""
+    if world is None:
+        return None
+    if world.node_tree is not None:
+        background = next((n for n in world.node_tree.nodes if n.type == 'BACKGROUND'), None)
+        if background is not None:
+            colour = background.inputs["Color"].default_value
+            strength = background.inputs["Strength"].default_value
+            return {"color": [colour[0], colour[1], colour[2]], "strength": strength}
+    return {"color": list(world.color), "strength": 1.0}
+
+
+def scene_extras(scene):
+    """The scene's `caustic` extras."""
+    r = scene.render
+    extras = {"resolution": resolution(scene), "fps": r.fps / r.fps_base}
+    if scene.camera is not None:
+        extras["camera"] = scene.camera.name
+    if r.use_motion_blur:
+        extras["shutter"] = {"length_frames": r.motion_blur_shutter, "position": r.motion_blur_position}
+    world = world_extras(scene.world)
+    if world is not None:
+        extras["world"] = world
+    return extras
+
+
+def focus_distance(camera_object):
+    """Blender's focus distance: the focus object's depth along the view, else the distance set."""
+    dof = camera_object.data.dof
+    if dof.focus_object is None:
+        return dof.focus_distance
+    view = camera_object.matrix_world.inverted() @ dof.focus_object.matrix_world.translation
+    return max(0.0, -view.z)
+
+
+def lens_extras(camera_object):
+    """The camera's thin lens, or None when depth of field is off."""
+    camera = camera_object.data
+    if not camera.dof.use_dof:
+        return None
+    return {"fstop": camera.dof.aperture_fstop, "focus_distance": focus_distance(camera_object),
+            "focal_length_mm": camera.lens, "blades": camera.dof.aperture_blades,
+            "blade_rotation_deg": math.degrees(camera.dof.aperture_rotation)}
+
+
+def area_light_extras(light):
+    """A Blender area light: shape, size, power (W) and colour."""
+    extras = {"shape": light.shape, "size": light.size, "power": light.energy, "color": list(light.color)}
+    if light.shape in ('RECTANGLE', 'ELLIPSE'):
+        extras["size_y"] = light.size_y
+    return extras
+
+
+def node_extras(blender_object):
+    """What the exporter drops from an object: area lights, the sun's angle, the lens."""
+    if blender_object.type == 'LIGHT' and blender_object.data.type == 'AREA':
+        return {"area_light": area_light_extras(blender_object.data)}
+    if blender_object.type == 'LIGHT' and blender_object.data.type == 'SUN':
+        return {"sun_angle_deg": math.degrees(blender_object.data.angle)}
+    if blender_object.type == 'CAMERA':
+        lens = lens_extras(blender_object)
+        return {"lens": lens} if lens else None
+    return None
+
+
+def material_extras(material):
+    """Dispersion from the material's Caustic settings."""
+    settings = getattr(material, "caustic", None)
+    if settings is None or settings.dispersion == 'NONE':
+        return None
+    if settings.dispersion == 'ABBE':
+        return {"abbe": settings.abbe}
+    return {"glass": settings.glass}
+
+
+def add_extras(gltf_object, caustic):
+    """Adds `caustic` under the object's extras, beside what is there."""
+    if caustic:
+        extras = gltf_object.extras if isinstance(gltf_object.extras, dict) else {}
+        gltf_object.extras = {**extras, "caustic": caustic}
+
+
+class glTF2ExportUserExtension:
+    """The exporter's hooks (found by the exporter on enabled add-ons)."""
+
+    def gather_scene_hook(self, gltf_scene, blender_scene, export_settings):
+        if _exporting:
+            add_extras(gltf_scene, scene_extras(blender_scene))
+
+    def gather_node_hook(self, gltf_node, blender_object, export_settings):
+        if _exporting:
+            add_extras(gltf_node, node_extras(blender_object))
+
+    def gather_material_hook(self, gltf_material, blender_material, export_settings):
+        if _exporting:
+            add_extras(gltf_material, material_extras(blender_material))
+
+
+# Principled BSDF inputs Caustic renders (everything else is ignored, with a warning).
+SUPPORTED_INPUTS = {"Base Color", "Metallic", "Roughness", "IOR", "Transmission Weight", "Emission Color",
+                    "Emission Strength", "Specular IOR Level"}
+
+# Inputs that change the look when set away from these values, and that Caustic ignores.
+IGNORED_INPUTS = {"Coat Weight": 0.0, "Sheen Weight": 0.0, "Subsurface Weight": 0.0, "Anisotropic": 0.0,
+                  "Alpha": 1.0, "Thin Film Thickness": 0.0}
+
+
+def material_warnings(material):
+    """What of `material` Caustic does not render, as sentences."""
+    if material.node_tree is None:
+        return []
+    output = next((n for n in material.node_tree.nodes if n.type == 'OUTPUT_MATERIAL' and n.is_active_output), None)
+    surface = output.inputs["Surface"].links[0].from_node if output and output.inputs["Surface"].links else None
+    if surface is None:
+        return []
+    if surface.type != 'BSDF_PRINCIPLED':
+        return [f"material '{material.name}': only the Principled BSDF is supported ({surface.name} is exported "
+                "as Blender's glTF exporter sees it)"]
+    warnings = []
+    for name, neutral in IGNORED_INPUTS.items():
+        socket = surface.inputs.get(name)
+        if socket is not None and (socket.is_linked or abs(socket.default_value - neutral) > 1e-6):
+            warnings.append(f"material '{material.name}': {name} is not supported and is ignored")
+    transmission = surface.inputs["Transmission Weight"].default_value
+    if transmission > 0 and surface.inputs["Roughness"].default_value > 0.05:
+        warnings.append(f"material '{material.name}': rough transmission renders as smooth glass")
+    if surface.inputs["Normal"].is_linked:
+        warnings.append(f"material '{material.name}': normal maps are not supported and are ignored")
+    return warnings
+
+
+def scene_warnings(depsgraph):
+    """What of the scene Caustic does not render, once per material."""
+    materials = {slot.material for obj in depsgraph.scene.objects if obj.type == 'MESH'
+                 for slot in obj.material_slots if slot.material is not None}
+    warnings = [w for m in sorted(materials, key=lambda m: m.name) for w in material_warnings(m)]
+    for light in {obj.data for obj in depsgraph.scene.objects if obj.type == 'LIGHT'}:
+        if light.type in ('POINT', 'SPOT') and light.shadow_soft_size > 0:
+            warnings.append(f"light '{light.name}': the radius is not exported; it renders as a point")
+    return warnings
+
+
+def export(scene, path):
+    """Writes `scene` with its animation to `path` (.gltf) with Caustic's extras; returns the
+    seconds it took."""
+    global _exporting
+    start = time.perf_counter()
+    # One timeline sampled once a frame (LINEAR keys); no KHR_animation_pointer (the renderer
+    # cannot read it).
+    options = dict(filepath=str(path), export_format='GLTF_SEPARATE', export_cameras=True, export_lights=True,
+                   export_extras=True, export_apply=True, export_yup=True, use_renderable=True,
+                   use_active_scene=True, export_animations=True, export_animation_mode='SCENE',
+                   export_force_sampling=True, export_frame_range=True, export_pointer_animation=False)
+    _exporting = True
+    try:
+        with bpy.context.temp_override(scene=scene):
+            result = bpy.ops.export_scene.gltf(**options)
+    finally:
+        _exporting = False
+    if result != {'FINISHED'}:
+        raise RuntimeError(f"Blender's glTF exporter did not finish ({result})")
+    return time.perf_counter() - start

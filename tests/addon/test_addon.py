@@ -1,0 +1,302 @@
+"""The Blender add-on, driven headless through `bpy` (Blender 5.0.1 as a Python module).
+
+Run by tests/addon.rs (the README's test command) with the virtual environment it prepares;
+CAUSTIC_BINARY names the renderer. The add-on is enabled through `addon_utils` in a temporary
+HOME, as a user would enable it; each test builds its scene in bpy and renders through the add-on
+with `bpy.ops.render.render()`, then reads the pixels Blender saved.
+"""
+
+import json
+import os
+import pathlib
+import subprocess
+import sys
+import tempfile
+import time
+import unittest
+
+HOME = tempfile.mkdtemp(prefix="caustic-addon-home-")
+os.environ["HOME"] = HOME
+
+import bpy  # noqa: E402  (first: it makes Blender's own modules importable)
+import addon_utils  # noqa: E402
+import mathutils  # noqa: E402
+import numpy as np  # noqa: E402
+import OpenEXR  # noqa: E402
+from bpy_extras.object_utils import world_to_camera_view  # noqa: E402
+
+ROOT = pathlib.Path(__file__).resolve().parents[2]
+BINARY = os.environ["CAUSTIC_BINARY"]
+OUT = pathlib.Path(tempfile.mkdtemp(prefix="caustic-addon-out-"))
+
+
+def enable_addon():
+    """Links addon/ into the user's add-ons as `caustic` and enables it in the preferences."""
+    addons = pathlib.Path(bpy.utils.user_resource('SCRIPTS', path="addons", create=True))
+    (addons / "caustic").symlink_to(ROOT / "addon")
+    bpy.utils.refresh_script_paths()
+    addon_utils.enable("caustic", default_set=True, handle_error=None)
+    bpy.context.preferences.addons["caustic"].preferences.binary = BINARY
+    return sys.modules["caustic.engine"]
+
+
+ENGINE = enable_addon()
+STARTED = []  # every renderer process the add-on starts
+
+
+class CountedProcess(ENGINE.RenderProcess):
+    def __init__(self, args):
+        super().__init__(args)
+        STARTED.append(self)
+
+
+ENGINE.RenderProcess = CountedProcess
+
+
+def clear_scene():
+    """An empty scene rendered by Caustic at 64x48, 32 passes."""
+    for collection in (bpy.data.objects, bpy.data.meshes, bpy.data.materials, bpy.data.lights, bpy.data.cameras,
+                       bpy.data.actions):
+        for block in list(collection):
+            collection.remove(block)
+    scene = bpy.context.scene
+    scene.render.engine = 'CAUSTIC'
+    scene.render.resolution_x, scene.render.resolution_y, scene.render.resolution_percentage = 64, 48, 100
+    scene.render.use_motion_blur = False
+    scene.frame_start, scene.frame_end, scene.frame_step = 1, 1, 1
+    scene.frame_set(1)
+    scene.caustic.passes = 32
+    scene.world = None
+    scene.render.image_settings.media_type = 'IMAGE'
+    scene.render.image_settings.file_format = 'OPEN_EXR'
+    scene.render.image_settings.color_depth = '32'
+    return scene
+
+
+def material(name, colour=(0.8, 0.8, 0.8), transmission=0.0, ior=1.5):
+    m = bpy.data.materials.new(name)
+    bsdf = m.node_tree.nodes["Principled BSDF"]
+    bsdf.inputs["Base Color"].default_value = (*colour, 1.0)
+    bsdf.inputs["Roughness"].default_value = 0.0 if transmission else 1.0
+    bsdf.inputs["Transmission Weight"].default_value = transmission
+    bsdf.inputs["IOR"].default_value = ior
+    bsdf.inputs["Specular IOR Level"].default_value = 0.5 if transmission else 0.0
+    return m
+
+
+def add(operator, material_=None, **kwargs):
+    operator(**kwargs)
+    obj = bpy.context.object
+    if material_ is not None:
+        obj.data.materials.append(material_)
+    return obj
+
+
+def look_at(obj, target):
+    direction = mathutils.Vector(target) - obj.location
+    obj.rotation_euler = direction.to_track_quat('-Z', 'Y').to_euler()
+
+
+def camera(location, target):
+    cam = add(bpy.ops.object.camera_add, location=location)
+    look_at(cam, target)
+    bpy.context.scene.camera = cam
+    return cam
+
+
+def glass_sphere_scene():
+    """A white floor, a glass ball 1 above it and a small area light straight above the ball: the
+    ball focuses a caustic onto the floor under it."""
+    scene = clear_scene()
+    add(bpy.ops.mesh.primitive_plane_add, material("Floor"), size=8)
+    add(bpy.ops.mesh.primitive_uv_sphere_add, material("Glass", (1, 1, 1), 1.0), segments=64, ring_count=32,
+        radius=0.5, location=(0, 0, 1.0))
+    bpy.ops.object.shade_smooth()
+    light = add(bpy.ops.object.light_add, type='AREA', location=(0, 0, 3.5))
+    light.data.size, light.data.energy = 0.1, 60.0
+    camera((0, -4, 4), (0, 0, 0.3))
+    return scene
+
+
+def read_exr(path):
+    """The RGB pixels of an EXR (row 0 at the top), from its Combined or RGBA channels."""
+    channels = OpenEXR.File(str(path)).channels()
+    key = "Combined" if "Combined" in channels else "RGBA"
+    return channels[key].pixels[..., :3].astype(np.float64)
+
+
+def render_still(name):
+    scene = bpy.context.scene
+    scene.render.filepath = str(OUT / f"{name}.exr")
+    bpy.ops.render.render(write_still=True)
+    return read_exr(scene.render.filepath)
+
+
+def pixel_of(scene, point):
+    """The (row, column) where the scene's camera sees `point`."""
+    v = world_to_camera_view(scene, scene.camera, mathutils.Vector(point))
+    w, h = scene.render.resolution_x, scene.render.resolution_y
+    return int((1.0 - v.y) * h), int(v.x * w)
+
+
+def luminance(rgb):
+    return rgb @ np.array([0.2126, 0.7152, 0.0722])
+
+
+def block(image, centre, half=2):
+    r, c = centre
+    return luminance(image[r - half:r + half + 1, c - half:c + half + 1]).mean()
+
+
+class StillRenders(unittest.TestCase):
+    def test_glass_ball_caustic_is_brighter_than_the_floor_beside_it(self):
+        scene = glass_sphere_scene()
+        image = render_still("caustic")
+        caustic, beside = block(image, pixel_of(scene, (0, 0, 0))), block(image, pixel_of(scene, (1.6, 0, 0)))
+        print(f"caustic {caustic:.3f}, floor beside it {beside:.3f}")
+        self.assertGreater(caustic, 3.0 * beside)
+        self.assertGreater(beside, 0.0)
+
+    def test_image_matches_the_command_line_render_of_the_same_export(self):
+        scene = glass_sphere_scene()
+        image = render_still("through_blender")
+        exported = OUT / "same" / "scene.gltf"
+        exported.parent.mkdir()
+        sys.modules["caustic.export"].export(scene, exported)
+        flags = ENGINE.render_flags(scene.caustic)
+        subprocess.run([BINARY, "render", str(exported), "-o", str(OUT / "same"), "--progress", "none", *flags],
+                       check=True)
+        cli = read_exr(OUT / "same" / "frame_0001.exr")
+        # The same scene, settings and seed: the same image, up to Blender's EXR round trip.
+        np.testing.assert_allclose(image, cli, rtol=1e-5, atol=1e-6)
+
+    def test_dispersive_prism_separates_colours(self):
+        """The dispersion regression prism (scenes/prism.gltf, imported): with the SF11 glass from the
+        material's Caustic settings, the band's red and blue centroids lie pixels apart; with a
+        constant index (SF11's n_d) they coincide."""
+        scene = clear_scene()
+        bpy.ops.import_scene.gltf(filepath=str(ROOT / "scenes" / "prism.gltf"))
+        for block_ in [scene, *bpy.data.materials, *bpy.data.objects]:
+            block_.pop("caustic", None)
+        scene.camera = bpy.data.objects["Camera"]
+        scene.render.resolution_x, scene.render.resolution_y = 128, 64
+        prism = bpy.data.materials["Prism"]
+        prism.node_tree.nodes["Principled BSDF"].inputs["IOR"].default_value = 1.78472
+        separation = {}
+        for mode in ("GLASS", "NONE"):
+            prism.caustic.dispersion, prism.caustic.glass = mode, "SF11"
+            image = render_still(f"prism_{mode}")
+            band = np.clip(image.sum(axis=0) - np.median(image.sum(axis=0), axis=0), 0, None)
+            x = np.arange(band.shape[0])
+            red, blue = (band[:, c] @ x / band[:, c].sum() for c in (0, 2))
+            separation[mode] = blue - red
+        print(f"blue minus red centroid: {separation}")
+        self.assertGreater(abs(separation["GLASS"]), 2.0)
+        self.assertLess(abs(separation["NONE"]), 0.5)
+
+
+class Animation(unittest.TestCase):
+    def test_render_animation_renders_three_frames_with_one_process(self):
+        scene = glass_sphere_scene()
+        red = add(bpy.ops.mesh.primitive_cube_add, material("Red", (0.9, 0.05, 0.05)), size=0.4,
+                  location=(-1.2, 0.8, 0.2))
+        for frame, x in [(1, -1.2), (3, 1.2)]:
+            red.location.x = x
+            red.keyframe_insert("location", index=0, frame=frame)
+        scene.frame_start, scene.frame_end = 1, 3
+        scene.render.filepath = str(OUT / "anim_####")
+        before = len(STARTED)
+        start = time.perf_counter()
+        bpy.ops.render.render(animation=True)
+        print(f"Render Animation of 3 frames: {time.perf_counter() - start:.2f} s")
+        self.assertEqual(len(STARTED) - before, 1, "one renderer process for the whole range")
+        columns = []
+        for frame in (1, 2, 3):
+            image = read_exr(OUT / f"anim_{frame:04}.exr")
+            redness = np.clip(image[..., 0] - image[..., 1:].max(axis=-1), 0, None)
+            columns.append(redness.sum(axis=0) @ np.arange(image.shape[1]) / redness.sum())
+        print(f"the red cube's column in frames 1, 2, 3: {columns}")
+        self.assertLess(columns[0] + 5, columns[1])
+        self.assertLess(columns[1] + 5, columns[2])
+
+
+class Cancel(unittest.TestCase):
+    def test_cancelling_ends_the_renderer_process(self):
+        glass_sphere_scene().caustic.passes = 1_000_000
+        asked = []
+
+        def user_presses_esc(engine):
+            asked.append(time.perf_counter())
+            return len(asked) > 5
+
+        ENGINE.cancelled, original = user_presses_esc, ENGINE.cancelled
+        try:
+            start = time.perf_counter()
+            bpy.ops.render.render()
+        finally:
+            ENGINE.cancelled = original
+        process = STARTED[-1].process
+        print(f"cancelled after {time.perf_counter() - start:.2f} s; renderer exit code {process.returncode}")
+        self.assertIsNotNone(process.returncode, "the renderer still runs")
+        self.assertFalse(pathlib.Path(f"/proc/{process.pid}").exists(), "the renderer process is left behind")
+        self.assertLess(time.perf_counter() - start, 60.0, "the render did not end when cancelled")
+
+
+class Errors(unittest.TestCase):
+    def test_a_wrong_program_path_fails_with_the_reason(self):
+        glass_sphere_scene()
+        preferences = bpy.context.preferences.addons["caustic"].preferences
+        preferences.binary = "/no/such/caustic"
+        try:
+            with self.assertRaisesRegex(RuntimeError, "not an executable file: /no/such/caustic"):
+                bpy.ops.render.render()
+        finally:
+            preferences.binary = BINARY
+
+    def test_a_scene_the_renderer_rejects_fails_with_its_message(self):
+        scene = glass_sphere_scene()
+        scene.camera.data.type = 'ORTHO'
+        with self.assertRaisesRegex(RuntimeError, "orthographic cameras are not supported"):
+            bpy.ops.render.render()
+
+
+class Export(unittest.TestCase):
+    def test_what_the_exporter_drops_travels_in_the_extras(self):
+        scene = glass_sphere_scene()
+        scene.render.resolution_percentage = 50
+        scene.render.use_motion_blur = True
+        scene.render.motion_blur_shutter, scene.render.motion_blur_position = 0.25, 'START'
+        scene.render.fps, scene.render.fps_base = 30, 1.001
+        cam = scene.camera
+        cam.data.dof.use_dof, cam.data.dof.aperture_fstop, cam.data.dof.focus_distance = True, 2.8, 4.5
+        cam.data.dof.aperture_blades = 6
+        light = bpy.data.objects["Area"]
+        light.data.shape, light.data.size, light.data.size_y, light.data.color = 'RECTANGLE', 0.3, 0.2, (1, 0.5, 0.25)
+        bpy.data.materials["Glass"].caustic.dispersion, bpy.data.materials["Glass"].caustic.abbe = 'ABBE', 30.0
+        path = OUT / "extras" / "scene.gltf"
+        path.parent.mkdir()
+        sys.modules["caustic.export"].export(scene, path)
+        gltf = json.loads(path.read_text())
+        extras = gltf["scenes"][0]["extras"]["caustic"]
+        self.assertEqual(extras["resolution"], [32, 24])
+        self.assertAlmostEqual(extras["fps"], 30 / 1.001, places=4)
+        self.assertEqual(extras["shutter"], {"length_frames": 0.25, "position": "START"})
+        self.assertEqual(extras["camera"], cam.name)
+        nodes = {n["name"]: n.get("extras", {}).get("caustic") for n in gltf["nodes"]}
+        area = nodes["Area"]["area_light"]
+        self.assertEqual((area["shape"], area["power"]), ("RECTANGLE", 60.0))
+        np.testing.assert_allclose([area["size"], area["size_y"], *area["color"]], [0.3, 0.2, 1, 0.5, 0.25], rtol=1e-6)
+        lens = nodes[cam.name]["lens"]
+        self.assertEqual(lens["blades"], 6)
+        np.testing.assert_allclose([lens["fstop"], lens["focus_distance"], lens["focal_length_mm"]], [2.8, 4.5, 50.0],
+                                   rtol=1e-6)
+        glass = next(m for m in gltf["materials"] if m["name"] == "Glass")
+        self.assertEqual(glass["extras"]["caustic"], {"abbe": 30.0})
+        # The user's own glTF exports carry nothing of Caustic's.
+        own = OUT / "extras" / "own.gltf"
+        bpy.ops.export_scene.gltf(filepath=str(own), export_format='GLTF_SEPARATE', export_extras=True)
+        self.assertNotIn("caustic", own.read_text())
+
+
+if __name__ == "__main__":
+    unittest.main(verbosity=2)
