@@ -29,6 +29,23 @@ enum Command {
     Info(InfoArgs),
     /// Draw error against time from --log files as an SVG chart (estimated, and true when known).
     Plot(PlotArgs),
+    /// Add up partial results (`render --pass-range A..B --partial`) into OUT/frame_####.exr.
+    Merge(MergeArgs),
+}
+
+/// Flags of `caustic merge`.
+#[derive(Args, Debug)]
+pub struct MergeArgs {
+    /// Partial results (`frame_####.passes_A-B.partial`), of one or more frames; each frame's must
+    /// cover passes 0..N without a gap or an overlap.
+    #[arg(required = true)]
+    partials: Vec<PathBuf>,
+    /// Output folder for frame_NNNN.exr.
+    #[arg(short, long = "out", value_name = "DIR", default_value = "renders")]
+    out: PathBuf,
+    /// Confidence of the per-pixel error bound (Error.Y), in (0, 1).
+    #[arg(long, value_name = "C", default_value_t = 0.9, allow_negative_numbers = true, value_parser = unit_interval)]
+    confidence: f64,
 }
 
 /// Flags of `caustic plot`.
@@ -129,6 +146,15 @@ pub struct RenderArgs {
     /// rendered together (the same images in expectation; for comparison, and as a fallback).
     #[arg(long)]
     no_reuse: bool,
+    /// Render exactly passes A..B (A included, B not) of each frame, as passes A..B of a whole
+    /// run would be; needs --partial.
+    #[arg(long, value_name = "A..B", value_parser = parse_pass_range, requires = "partial",
+          conflicts_with_all = ["passes", "time_budget", "target_error"])]
+    pass_range: Option<std::ops::Range<u64>>,
+    /// Write each frame's sums as OUT/frame_####.passes_A-B.partial for `caustic merge`, instead of
+    /// an EXR; needs --pass-range.
+    #[arg(long, requires = "pass_range")]
+    partial: bool,
     /// Memory for the frames rendered together, e.g. 4G, 512M or bytes (default 4G): it sets how
     /// many frames share each pass.
     #[arg(long, value_name = "SIZE", value_parser = memory_size, default_value = "4G")]
@@ -191,6 +217,17 @@ fn memory_size(s: &str) -> Result<u64, String> {
     };
     let value: u64 = digits.trim().parse().ok().filter(|&v| v >= 1).ok_or_else(bad)?;
     value.checked_mul(1 << shift).ok_or_else(|| format!("'{s}' is too large"))
+}
+
+/// A pass range `A..B` with A < B.
+fn parse_pass_range(s: &str) -> Result<std::ops::Range<u64>, String> {
+    let range = s
+        .split_once("..")
+        .and_then(|(a, b)| Some(a.trim().parse::<u64>().ok()?..b.trim().parse::<u64>().ok()?));
+    match range {
+        Some(r) if r.start < r.end => Ok(r),
+        _ => Err(format!("expected passes A..B with A < B (A included, B not), e.g. 0..32; got '{s}'")),
+    }
 }
 
 fn positive_f64(s: &str) -> Result<f64, String> {
@@ -267,6 +304,7 @@ impl RenderArgs {
             },
             reuse: !self.no_reuse,
             memory_budget: self.memory_budget,
+            partial_passes: self.pass_range.clone(),
         }
     }
 }
@@ -308,6 +346,12 @@ pub fn run(cli: Cli) -> Result<(), String> {
             Ok(())
         }
         Command::Plot(args) => crate::plot::plot(&args.logs, &args.out),
+        Command::Merge(args) => {
+            for (path, frame) in frames::merge(&args.partials, &args.out, args.confidence)? {
+                eprintln!("caustic: wrote {} ({} passes)", path.display(), frame.passes);
+            }
+            Ok(())
+        }
         Command::Bench(args) => {
             let scene = args.scene.unwrap_or_else(|| PathBuf::from(DEMO_SCENE));
             match args.frames {

@@ -74,6 +74,9 @@ pub fn display_xyz(lambda_nm: f32) -> DVec3 {
     linear_rec709_to_xyz((rgb - DVec3::splat(lowest)) / (1.0 - lowest))
 }
 
+/// The f64 numbers one pixel's sums are stored as (see [`Film::pixel_sums`]).
+pub const PIXEL_SUMS: usize = 7;
+
 /// One pixel's running sums over passes.
 #[derive(Clone, Copy, Debug, Default, PartialEq)]
 pub struct PixelSums {
@@ -140,6 +143,53 @@ impl Film {
             white_y_squared: 0.0,
             non_finite_estimates: 0,
         }
+    }
+
+    /// Adds another film's sums to this one (passes rendered elsewhere: sums merge exactly).
+    /// The films must have the same size, mode and bands.
+    pub fn add(&mut self, other: &Film) {
+        for (a, b) in self.pixels.iter_mut().zip(&other.pixels) {
+            a.xyz += b.xyz;
+            a.y_squared += b.y_squared;
+            a.y_white += b.y_white;
+            a.laplacian_y += b.laplacian_y;
+            a.passes += b.passes;
+        }
+        for (a, b) in self.bins.sums.iter_mut().zip(&other.bins.sums) {
+            *a += b;
+        }
+        self.white_xyz += other.white_xyz;
+        self.passes += other.passes;
+        self.white_y += other.white_y;
+        self.white_y_squared += other.white_y_squared;
+        self.non_finite_estimates += other.non_finite_estimates;
+    }
+
+    /// Every per-pixel sum as an f64, pixel by pixel (`PIXEL_SUMS` each), then the spectral bands.
+    pub fn pixel_sums(&self) -> Vec<f64> {
+        let per_pixel = self.pixels.iter().flat_map(|p| {
+            [p.xyz.x, p.xyz.y, p.xyz.z, p.y_squared, p.y_white, p.laplacian_y, p.passes as f64]
+        });
+        per_pixel.chain(self.bins.sums.iter().copied()).collect()
+    }
+
+    /// Puts back sums that [`Film::pixel_sums`] gave; `None` when their count does not fit.
+    pub fn set_pixel_sums(&mut self, sums: &[f64]) -> Option<()> {
+        let pixel_part = self.pixels.len() * PIXEL_SUMS;
+        if sums.len() != pixel_part + self.bins.sums.len() {
+            return None;
+        }
+        for (p, s) in self.pixels.iter_mut().zip(sums[..pixel_part].chunks_exact(PIXEL_SUMS)) {
+            *p = PixelSums {
+                xyz: DVec3::new(s[0], s[1], s[2]),
+                y_squared: s[3],
+                y_white: s[4],
+                laplacian_y: s[5],
+                passes: s[6] as u64,
+            };
+        }
+        self.bins.sums.copy_from_slice(&sums[pixel_part..]);
+        Some(())
     }
 
     /// Adds one pass of gather radius `radius`: `radiance[i]` and `laplacian[i]` at `lambda_nm`,

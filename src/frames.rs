@@ -5,14 +5,16 @@
 //! Passes run until `--passes` or `--time-budget` is reached, whichever comes first. Each pass
 //! samples one time in the frame's shutter (DESIGN.md step 1), shared by its eye rays and photons.
 
+use std::ops::Range;
 use std::path::{Path, PathBuf};
 use std::sync::Arc;
 use std::time::Instant;
 
 use crate::accel::{Accel, Bvh};
-use crate::error::{summarize, ErrorSummary};
+use crate::error::{summarize, ErrorSummary, PixelError};
 use crate::film::{Film, FilmMode};
 use crate::monitor::{ErrorSettings, Monitor, StopReason};
+use crate::partial;
 use crate::progress::Progress;
 pub use crate::progress::ProgressStyle;
 use crate::sampling::pass_time_sample;
@@ -73,6 +75,9 @@ pub struct RenderSettings {
     pub reuse: bool,
     /// Memory for the frames rendered together, in bytes.
     pub memory_budget: u64,
+    /// Render exactly these passes and write partial results (`--pass-range A..B --partial`)
+    /// for `caustic merge` instead of EXRs.
+    pub partial_passes: Option<Range<u64>>,
 }
 
 impl RenderSettings {
@@ -99,6 +104,7 @@ impl RenderSettings {
             errors: ErrorSettings::default(),
             reuse: true,
             memory_budget: DEFAULT_MEMORY_BUDGET,
+            partial_passes: None,
         }
     }
 }
@@ -214,9 +220,39 @@ fn check_resolution([width, height]: [u32; 2]) -> Result<(), String> {
     Ok(())
 }
 
+/// What a render writes for `frame`: its EXR, or its partial result.
+fn output_path(settings: &RenderSettings, frame: i32) -> PathBuf {
+    match &settings.partial_passes {
+        Some(passes) => partial::partial_path(&settings.out_dir, frame, passes),
+        None => frame_path(&settings.out_dir, frame),
+    }
+}
+
 /// The output file of `frame`.
 pub fn frame_path(out_dir: &Path, frame: i32) -> PathBuf {
     out_dir.join(format!("frame_{frame:04}.exr"))
+}
+
+/// Everything that shapes a pass beyond the scene: what partial results must share to merge.
+fn fingerprint(
+    sppm: &SppmSettings,
+    shutter: Shutter,
+    prepared: &Prepared,
+    settings: &RenderSettings,
+) -> serde_json::Value {
+    let lens =
+        prepared.lens().map(|l| [l.aperture_radius, l.focus_distance, l.blades as f32, l.blade_rotation]);
+    serde_json::json!({
+        "resolution": [sppm.width, sppm.height],
+        "photons_per_pass": sppm.photons_per_pass,
+        "alpha": sppm.alpha,
+        "initial_radius": sppm.initial_radius,
+        "seed": sppm.seed,
+        "wavelength_nm": sppm.fixed_wavelength_nm,
+        "spectral_bins": settings.spectral_bins,
+        "shutter": [shutter.open, shutter.length],
+        "lens": lens,
+    })
 }
 
 /// A render of one scene over its frames: the prepared time range and what every frame shares.
@@ -226,6 +262,8 @@ pub struct Shot {
     still: Option<(Scene, Accel)>,
     shutter: Shutter,
     sppm: SppmSettings,
+    /// For partial results: the scene's SHA-256 and the settings that shape every pass.
+    identity: Option<(String, serde_json::Value)>,
 }
 
 impl Shot {
@@ -249,7 +287,14 @@ impl Shot {
             fixed_wavelength_nm: settings.wavelength_nm,
         };
         let still = (!prepared.has_motion()).then(|| (first, Accel::new(Arc::clone(&fixed_bvh), &[])));
-        Ok(Shot { prepared, fixed_bvh, still, shutter, sppm })
+        let identity = match settings.partial_passes {
+            Some(_) => Some((
+                partial::scene_sha256(&settings.scene)?,
+                fingerprint(&sppm, shutter, &prepared, settings),
+            )),
+            None => None,
+        };
+        Ok(Shot { prepared, fixed_bvh, still, shutter, sppm, identity })
     }
 
     /// The SPPM settings every pass uses.
@@ -316,7 +361,7 @@ pub fn render(settings: &RenderSettings) -> Result<RenderReport, String> {
         .map_err(|e| format!("cannot create output folder {}: {e}", settings.out_dir.display()))?;
     let mut report = RenderReport { fixed_bvh_builds: 1, ..Default::default() };
     let (skipped, todo): (Vec<i32>, Vec<i32>) =
-        settings.frames.iter().partition(|&&f| settings.resume && frame_path(&settings.out_dir, f).exists());
+        settings.frames.iter().partition(|&&f| settings.resume && output_path(settings, f).exists());
     report.skipped = skipped;
     report.block_frames = shot.block_frames(settings, todo.len());
     for block in todo.chunks(report.block_frames.max(1)) {
@@ -378,9 +423,12 @@ impl Posed<'_> {
     }
 }
 
-/// The passes a frame renders at most: `--passes`, else none when a time budget or a target
-/// error ends it, else the default.
+/// The passes a frame renders at most: a partial result's range, else `--passes`, else none
+/// when a time budget or a target error ends it, else the default.
 fn pass_limit(settings: &RenderSettings) -> Option<u64> {
+    if let Some(passes) = &settings.partial_passes {
+        return Some(passes.end - passes.start);
+    }
     let open_ended = settings.time_budget_s.is_some() || settings.errors.target.is_some();
     settings.passes.or((!open_ended).then_some(DEFAULT_PASSES))
 }
@@ -411,9 +459,11 @@ fn render_block(
     let limit = pass_limit(settings);
     let progress = Progress::new(settings.progress, frames, limit);
     let share = shot.shares(settings, frames.len());
-    let mut pass = 0;
+    let first_pass = settings.partial_passes.as_ref().map_or(0, |r| r.start);
+    let mut done = 0;
     while !active.is_empty() {
         let start = Instant::now();
+        let pass = first_pass + done;
         let samples = s.pass_samples(pass);
         let poses: Vec<Posed> = active
             .iter()
@@ -431,17 +481,17 @@ fn render_block(
         }
         drop(poses);
         let elapsed_share = start.elapsed().as_secs_f64() / active.len() as f64;
-        pass += 1;
+        done += 1;
         for frame in &mut active {
             frame.elapsed_s += elapsed_share;
         }
         let rendered: Vec<i32> = active.iter().map(|f| f.frame).collect();
-        progress.update(&rendered, pass, active[0].elapsed_s);
-        let photons = pass * s.photons_per_pass as u64;
+        progress.update(&rendered, done, active[0].elapsed_s);
+        let photons = done * s.photons_per_pass as u64;
         let (mut still_running, mut their_poses) = (Vec::new(), Vec::new());
         for (mut frame, own) in active.into_iter().zip(own_poses) {
             match stop_reason(settings, &mut frame, photons, limit)? {
-                Some(stopped_by) => finish_frame(settings, frame, photons, stopped_by, report)?,
+                Some(stopped_by) => finish_frame(shot, settings, frame, photons, stopped_by, report)?,
                 None => {
                     still_running.push(frame);
                     their_poses.push(own);
@@ -491,6 +541,13 @@ fn add_pass(
     frame.stats = frame.stats + stats;
 }
 
+/// Writes a frame's EXR with its error passes (the bound and the variance of the mean).
+pub fn write_frame(film: &Film, errors: &[PixelError], path: &Path) -> Result<(), String> {
+    let bound = errors.iter().map(|e| e.bound as f32).collect();
+    let variance = errors.iter().map(|e| e.variance as f32).collect();
+    film.write_exr(path, &[("Error.Y", bound), ("Variance.Y", variance)])
+}
+
 /// What stops `frame` after `photons` photon paths, if anything: its target error, its time
 /// budget or the pass count.
 fn stop_reason(
@@ -513,6 +570,7 @@ fn stop_reason(
 
 /// Writes a stopped frame's EXR (with its error passes, after `photons` photon paths), announces it and reports it.
 fn finish_frame(
+    shot: &Shot,
     settings: &RenderSettings,
     mut frame: FrameInProgress,
     photons: u64,
@@ -527,10 +585,21 @@ fn finish_frame(
             frame.frame, film.non_finite_estimates
         );
     }
-    let path = frame_path(&settings.out_dir, frame.frame);
-    let bound = errors.iter().map(|e| e.bound as f32).collect();
-    let variance = errors.iter().map(|e| e.variance as f32).collect();
-    film.write_exr(&path, &[("Error.Y", bound), ("Variance.Y", variance)])?;
+    let path = output_path(settings, frame.frame);
+    match (&settings.partial_passes, &shot.identity) {
+        (Some(passes), Some((sha256, fingerprint))) => {
+            let header = partial::header(
+                &settings.scene,
+                sha256.clone(),
+                fingerprint.clone(),
+                frame.frame,
+                passes.clone(),
+                &film,
+            );
+            partial::write(&path, &header, &film)?;
+        }
+        _ => write_frame(&film, &errors, &path)?,
+    }
     Progress::written(
         settings.progress,
         frame.frame,
@@ -549,4 +618,24 @@ fn finish_frame(
         error: summarize(&errors),
     });
     Ok(())
+}
+
+/// Adds up partial results into `OUT/frame_####.exr`, one per frame they hold, with the error
+/// passes a whole run writes; gives each EXR with its merged film.
+pub fn merge(paths: &[PathBuf], out_dir: &Path, confidence: f64) -> Result<Vec<(PathBuf, Film)>, String> {
+    let mut by_frame: std::collections::BTreeMap<i32, Vec<partial::Partial>> = Default::default();
+    for path in paths {
+        let p = partial::read(path)?;
+        by_frame.entry(p.header.frame).or_default().push(p);
+    }
+    std::fs::create_dir_all(out_dir)
+        .map_err(|e| format!("cannot create output folder {}: {e}", out_dir.display()))?;
+    let mut written = Vec::new();
+    for (frame, partials) in by_frame {
+        let film = partial::merge(partials)?;
+        let path = frame_path(out_dir, frame);
+        write_frame(&film, &crate::error::pixel_errors(&film, confidence), &path)?;
+        written.push((path, film));
+    }
+    Ok(written)
 }

@@ -69,7 +69,8 @@ fn run_script(name: &str) {
         .env("PYTHONDONTWRITEBYTECODE", "1")
         .output()
         .expect("run the bpy test script");
-    let text = format!("{}{}", String::from_utf8_lossy(&output.stdout), String::from_utf8_lossy(&output.stderr));
+    let text =
+        format!("{}{}", String::from_utf8_lossy(&output.stdout), String::from_utf8_lossy(&output.stderr));
     eprintln!("{text}");
     assert!(output.status.success(), "tests/addon/{name} failed:\n{text}");
 }

@@ -188,7 +188,8 @@ fn the_scene_chooses_its_camera_by_name() {
     let mut doc = gltf.to_json();
     let up = doc["nodes"].as_array().unwrap().len() - 1;
     doc["nodes"][up]["name"] = "LookingUp".into();
-    doc["scenes"][0]["extras"] = serde_json::json!({"caustic": {"camera": "LookingUp", "resolution": [4, 4]}});
+    doc["scenes"][0]["extras"] =
+        serde_json::json!({"caustic": {"camera": "LookingUp", "resolution": [4, 4]}});
     let path = dir.path().join("two_cameras.gltf");
     std::fs::write(&path, doc.to_string()).unwrap();
     let mut s = settings(&path, &dir.path().join("up"), 4);
