@@ -18,17 +18,20 @@ bl_info = {
 import bpy  # noqa: E402
 
 from . import engine, properties, ui  # noqa: E402
+from .export import CAUSTIC_OT_export_scene  # noqa: E402
 from .export import glTF2ExportUserExtension  # noqa: E402,F401 - found here by Blender's glTF exporter
 
 
 def register():
     properties.register()
     bpy.utils.register_class(engine.CausticRenderEngine)
+    bpy.utils.register_class(CAUSTIC_OT_export_scene)
     ui.register()
 
 
 def unregister():
     engine.close_session()
     ui.unregister()
+    bpy.utils.unregister_class(CAUSTIC_OT_export_scene)
     bpy.utils.unregister_class(engine.CausticRenderEngine)
     properties.unregister()

@@ -7,9 +7,11 @@ The hooks change nothing in the user's data: they only add extras to what is bei
 """
 
 import math
+import pathlib
 import time
 
 import bpy
+from bpy.props import StringProperty
 
 # True only while Caustic exports: the hooks stay out of the user's own glTF exports.
 _exporting = False
@@ -185,3 +187,23 @@ def export(scene, path):
     if result != {'FINISHED'}:
         raise RuntimeError(f"Blender's glTF exporter did not finish ({result})")
     return time.perf_counter() - start
+
+
+class CAUSTIC_OT_export_scene(bpy.types.Operator):
+    """Export the scene as Caustic reads it: glTF with the caustic extras (for `caustic render` on
+    a farm: `blender -b shot.blend --python-expr "import bpy; bpy.ops.caustic.export_scene(filepath='shot.gltf')"`)"""
+
+    bl_idname = "caustic.export_scene"
+    bl_label = "Export Caustic Scene"
+
+    filepath: StringProperty(name="File Path", subtype='FILE_PATH', description="The .gltf to write")
+
+    def execute(self, context):
+        if not self.filepath:
+            self.report({'ERROR'}, "Caustic: no file path to export to")
+            return {'CANCELLED'}
+        path = pathlib.Path(bpy.path.abspath(self.filepath))
+        path.parent.mkdir(parents=True, exist_ok=True)
+        seconds = export(context.scene, path)
+        self.report({'INFO'}, f"Caustic: exported {path} in {seconds:.2f} s")
+        return {'FINISHED'}
