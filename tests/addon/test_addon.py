@@ -292,6 +292,10 @@ class Export(unittest.TestCase):
                                    rtol=1e-6)
         glass = next(m for m in gltf["materials"] if m["name"] == "Glass")
         self.assertEqual(glass["extras"]["caustic"], {"abbe": 30.0})
+        # The operator farms run (`blender -b shot.blend --python-expr ...`) writes the same.
+        operator_path = OUT / "extras" / "operator" / "scene.gltf"
+        self.assertEqual(bpy.ops.caustic.export_scene(filepath=str(operator_path)), {'FINISHED'})
+        self.assertEqual(json.loads(operator_path.read_text())["scenes"][0]["extras"], gltf["scenes"][0]["extras"])
         # The user's own glTF exports carry nothing of Caustic's.
         own = OUT / "extras" / "own.gltf"
         bpy.ops.export_scene.gltf(filepath=str(own), export_format='GLTF_SEPARATE', export_extras=True)
