@@ -29,9 +29,30 @@ pub struct Hit {
 }
 
 /// One BVH over a list of triangles.
+///
+/// obvhs culls every node that a ray leaves within 1e-4 units of its origin (its CWBVH node test
+/// clamps the entry distance to a fixed 1e-4): hits nearer than that are lost, which in a scene
+/// 1e-4 units wide is nearly all of them, and at unit scale loses contact shadows and thin gaps.
+/// So each BVH works in coordinates multiplied by a power of two (exact in floating point, so
+/// nothing else changes) that brings its largest coordinate near 2^20, where 1e-4 units are
+/// 1e-10 of the scene; huge coordinates (1e30) come down to it too, where obvhs's surface-area
+/// costs would overflow.
 pub struct Bvh {
     bvh: Option<CwBvh>,
+    /// The triangles, in working coordinates.
     triangles: Vec<Triangle>,
+    /// Working coordinates over world coordinates (a power of two).
+    scale: f32,
+}
+
+/// The power of two that brings the largest finite coordinate of `corners` near 2^20.
+fn working_scale(corners: &[[Vec3; 3]]) -> f32 {
+    let largest =
+        corners.iter().flatten().filter(|v| v.is_finite()).map(|v| v.abs().max_element()).fold(0.0, f32::max);
+    if largest <= 0.0 {
+        return 1.0;
+    }
+    2f32.powi((20 - largest.log2().ceil() as i32).clamp(-100, 100))
 }
 
 /// The scene's BVHs: the fixed part (shared between poses) and the moving part.
@@ -75,7 +96,9 @@ impl Accel {
 
     /// The box around the moving triangles, or `None` when nothing moves.
     pub fn moving_bounds(&self) -> Option<(Vec3, Vec3)> {
-        let corners = self.moving.triangles.iter().flat_map(|t| [t.v0, t.v1, t.v2]).map(Vec3::from);
+        let scale = self.moving.scale;
+        let corners =
+            self.moving.triangles.iter().flat_map(|t| [t.v0, t.v1, t.v2]).map(|v| Vec3::from(v) / scale);
         corners.map(|p| (p, p)).reduce(|(a, b), (c, d)| (a.min(c), b.max(d)))
     }
 }
@@ -83,22 +106,34 @@ impl Accel {
 impl Bvh {
     /// Builds the BVH over `corners` (one entry per triangle).
     pub fn build(corners: &[[Vec3; 3]]) -> Self {
-        let triangles: Vec<Triangle> =
-            corners.iter().map(|c| Triangle { v0: c[0].into(), v1: c[1].into(), v2: c[2].into() }).collect();
+        let scale = working_scale(corners);
+        // A triangle a transform has sent to infinity cannot be hit; it becomes a point (never hit)
+        // so that the BVH's bounds stay finite and triangle numbers stay in step with the scene.
+        let triangles: Vec<Triangle> = corners
+            .iter()
+            .map(|c| c.map(|v| v * scale))
+            .map(|c| if c.iter().all(|v| v.is_finite()) { c } else { [Vec3::ZERO; 3] })
+            .map(|c| Triangle { v0: c[0].into(), v1: c[1].into(), v2: c[2].into() })
+            .collect();
         let bvh = (!triangles.is_empty()).then(|| {
             build_cwbvh_from_tris(&triangles, BvhBuildParams::medium_build(), &mut Duration::default())
         });
-        Bvh { bvh, triangles }
+        Bvh { bvh, triangles, scale }
     }
 
-    fn ray(origin: Vec3, direction: Vec3, t_max: f32) -> Ray {
-        Ray::new(origin.into(), direction.into(), 0.0, t_max)
+    /// The obvhs ray, in working coordinates, for a world-space ray.
+    fn ray(&self, origin: Vec3, direction: Vec3, t_max: f32) -> Ray {
+        // obvhs misses everything along a direction with a -0.0 component (its traversal order
+        // takes the component's sign as positive while 1 / -0.0 is -inf); adding +0.0 turns -0.0
+        // into +0.0 and changes nothing else. Lights pointing straight down (Blender's default
+        // sun) give such directions.
+        Ray::new((origin * self.scale).into(), (direction + Vec3::ZERO).into(), 0.0, t_max * self.scale)
     }
 
     /// The closest hit along the ray from `origin` in the unit `direction` before `t_max`.
     pub fn intersect(&self, origin: Vec3, direction: Vec3, t_max: f32) -> Option<Hit> {
         let bvh = self.bvh.as_ref()?;
-        let ray = Self::ray(origin, direction, t_max);
+        let ray = self.ray(origin, direction, t_max);
         let mut hit = RayHit::none();
         let found = bvh.ray_traverse(ray, &mut hit, |ray, slot| {
             self.triangles[bvh.primitive_indices[slot] as usize].intersect(ray)
@@ -107,8 +142,9 @@ impl Bvh {
             return None;
         }
         let triangle = bvh.primitive_indices[hit.primitive_id as usize];
-        let barycentric = barycentric(&self.triangles[triangle as usize], origin + direction * hit.t);
-        Some(Hit { triangle, t: hit.t, barycentric })
+        let barycentric =
+            barycentric(&self.triangles[triangle as usize], Vec3::from(ray.origin) + direction * hit.t);
+        Some(Hit { triangle, t: hit.t / self.scale, barycentric })
     }
 
     /// Whether anything lies on the ray from `origin` in the unit `direction` before `t_max`.
@@ -116,7 +152,7 @@ impl Bvh {
         let Some(bvh) = self.bvh.as_ref() else {
             return false;
         };
-        let ray = Self::ray(origin, direction, t_max);
+        let ray = self.ray(origin, direction, t_max);
         !bvh.ray_traverse_miss(ray, |ray, slot| {
             self.triangles[bvh.primitive_indices[slot] as usize].intersect(ray)
         })
@@ -159,13 +195,40 @@ mod tests {
     }
 
     #[test]
+    fn hits_nearer_than_obvhs_cull_distance_are_found_at_any_scale() {
+        for scale in [1e-4f32, 1.0, 1e3] {
+            let quad = |z: f32| {
+                [Vec3::new(-1.0, -1.0, z), Vec3::new(1.0, -1.0, z), Vec3::new(0.0, 1.0, z)].map(|v| v * scale)
+            };
+            let accel = Accel::build(&[quad(2e-5), quad(1.0)]);
+            let hit = accel.intersect(Vec3::ZERO, Vec3::Z, f32::INFINITY).expect("a hit");
+            assert_eq!(hit.triangle, 0, "scale {scale}");
+            assert!((hit.t / (2e-5 * scale) - 1.0).abs() < 1e-4, "scale {scale}: t {}", hit.t);
+            assert!(accel.occluded(Vec3::ZERO, Vec3::Z, 3e-5 * scale), "scale {scale}");
+        }
+    }
+
+    #[test]
+    fn directions_with_negative_zero_components_hit() {
+        let quad = [Vec3::new(-1.0, 2.0, -1.0), Vec3::new(-1.0, 2.0, 1.0), Vec3::new(1.0, 2.0, 0.0)];
+        let accel = Accel::build(&[quad]);
+        let origin = Vec3::new(-0.001, 0.0, 0.0004);
+        for direction in
+            [Vec3::new(-0.0, 1.0, -1.2e-7), Vec3::new(-0.0, 1.0, -0.0), Vec3::new(0.0, 1.0, -0.0)]
+        {
+            assert!(accel.occluded(origin, direction, f32::INFINITY), "{direction:?}");
+            assert!(accel.intersect(origin, direction, f32::INFINITY).is_some(), "{direction:?}");
+        }
+    }
+
+    #[test]
     fn offset_origins_leave_the_surface_at_any_scale() {
         for scale in [1e-4f32, 1.0, 1e5, 1e6] {
             let c = [Vec3::new(0.0, 0.0, 0.0), Vec3::new(1.0, 0.0, 0.0), Vec3::new(0.0, 1.0, 0.0)]
                 .map(|v| v * scale + Vec3::splat(scale * 0.3));
             let accel = Accel::build(&[c]);
             let p = (c[0] + c[1] + c[2]) / 3.0;
-            let o = offset_origin(p, Vec3::Z, Vec3::new(0.3, 0.2, 1.0).normalize());
+            let o = offset_origin(p, Vec3::Z, Vec3::new(0.3, 0.2, 1.0).normalize(), scale * 1.3);
             assert!(!accel.occluded(o, Vec3::new(0.3, 0.2, 1.0).normalize(), f32::INFINITY), "{scale}");
         }
     }

@@ -322,6 +322,8 @@ pub fn run(cli: Cli) -> Result<(), String> {
     match cli.command {
         Command::Render(args) => {
             let settings = args.settings();
+            // Ctrl-C and SIGTERM end the render after its current pass, keeping every written frame.
+            ctrlc::set_handler(frames::request_stop).map_err(|e| format!("cannot watch for Ctrl-C: {e}"))?;
             let report = thread_pool(args.threads)?.install(|| frames::render(&settings))?;
             if settings.progress != ProgressStyle::Json {
                 if !report.skipped.is_empty() {

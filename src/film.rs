@@ -293,13 +293,9 @@ impl Film {
         let channels = AnyChannels::sort(SmallVec::from_vec(list));
         let layer = Layer::new((w, h), LayerAttributes::default(), Encoding::SMALL_LOSSLESS, channels);
         let image = Image::from_layer(layer);
-        let temporary = path.with_extension("exr.partial");
-        image
-            .write()
-            .to_file(&temporary)
-            .map_err(|e| format!("cannot write {}: {e}", temporary.display()))?;
-        std::fs::rename(&temporary, path)
-            .map_err(|e| format!("cannot rename {} to {}: {e}", temporary.display(), path.display()))
+        crate::output::write_whole(path, |temporary| {
+            image.write().to_file(temporary).map_err(|e| format!("cannot write {}: {e}", path.display()))
+        })
     }
 }
 

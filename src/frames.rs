@@ -23,6 +23,19 @@ use crate::scene::pose::lens;
 use crate::scene::{Description, Prepared, Scene, TimeRange};
 use crate::sppm::{run_shared_pass, PassSamples, PassStats, PixelEstimate, Renderer, SppmSettings};
 
+/// Set when the user asks the render to stop (Ctrl-C, SIGTERM): the pass in flight finishes,
+/// frames not yet written are dropped, and the render ends with an error naming what was kept.
+static STOP_REQUESTED: std::sync::atomic::AtomicBool = std::sync::atomic::AtomicBool::new(false);
+
+/// Asks the render in progress to stop after its current pass (safe from a signal handler).
+pub fn request_stop() {
+    STOP_REQUESTED.store(true, std::sync::atomic::Ordering::SeqCst);
+}
+
+fn stop_requested() -> bool {
+    STOP_REQUESTED.load(std::sync::atomic::Ordering::SeqCst)
+}
+
 /// Passes when neither a pass count nor a time budget is given.
 pub const DEFAULT_PASSES: u64 = 64;
 
@@ -273,7 +286,14 @@ impl Shot {
         check_resolution([width, height])?;
         let shutter = shutter(settings, &description);
         let range = time_range(&settings.frames, shutter, description.fps);
-        let lens = lens(lens_settings(settings, &description), description.camera.focal_length_mm);
+        let lens_settings = lens_settings(settings, &description);
+        if let Some(l) = lens_settings.filter(|l| l.fstop > 0.0 && !(l.focus_distance > 0.0)) {
+            return Err(format!(
+                "depth of field (f-stop {}) needs a positive focus distance, got {} (set --focus-distance or the camera's)",
+                l.fstop, l.focus_distance
+            ));
+        }
+        let lens = lens(lens_settings, description.camera.focal_length_mm);
         let prepared = Prepared::with_lens(Arc::new(description), range, lens);
         let fixed_bvh = Arc::new(Bvh::build(&prepared.fixed_corners()));
         let first = prepared.pose(range.start);
@@ -488,6 +508,14 @@ fn render_block(
         let rendered: Vec<i32> = active.iter().map(|f| f.frame).collect();
         progress.update(&rendered, done, active[0].elapsed_s);
         let photons = done * s.photons_per_pass as u64;
+        if stop_requested() {
+            let written = report.frames.len();
+            let unfinished: Vec<String> = active.iter().map(|f| f.frame.to_string()).collect();
+            return Err(format!(
+                "interrupted: {written} frame(s) written; frame(s) {} not finished and not written; run the same command with --resume to continue",
+                unfinished.join(", ")
+            ));
+        }
         let (mut still_running, mut their_poses) = (Vec::new(), Vec::new());
         for (mut frame, own) in active.into_iter().zip(own_poses) {
             match stop_reason(settings, &mut frame, photons, limit)? {

@@ -3,23 +3,29 @@
 //!
 //! Ray origins are offset by a few ULPs of the position's coordinates, so self-intersection stays
 //! fixed at any scene scale (1e-4 to 1e6 units), where a fixed epsilon would fail at one end.
+//! Near the origin, where ULPs vanish, the offset follows the size of the coordinates the point
+//! was computed from instead.
 
 use glam::Vec3;
 
 /// A ray origin moved off the surface at `p` (geometric normal `ng`) to the side of `direction`,
 /// by a few ULPs of `p`'s coordinates (Wächter & Binder 2019, "A Fast and Robust Method for
-/// Avoiding Self-Intersection", Ray Tracing Gems chapter 6).
-pub fn offset_origin(p: Vec3, ng: Vec3, direction: Vec3) -> Vec3 {
+/// Avoiding Self-Intersection", Ray Tracing Gems chapter 6). `scale` is the largest coordinate
+/// `p` was computed from (its triangle's corners): Wächter & Binder's fixed offset near the
+/// origin is meant for coordinates of order 1 and is scaled down with smaller ones (a 1e-4 scene
+/// would otherwise be offset by a tenth of its size).
+pub fn offset_origin(p: Vec3, ng: Vec3, direction: Vec3, scale: f32) -> Vec3 {
     const ORIGIN: f32 = 1.0 / 32.0;
     const FLOAT_SCALE: f32 = 1.0 / 65536.0;
     const INT_SCALE: f32 = 256.0;
+    let s = scale.clamp(f32::MIN_POSITIVE, 1.0);
     let n = if ng.dot(direction) < 0.0 { -ng } else { ng };
     let offset = |p: f32, n: f32| {
         let of_i = (INT_SCALE * n) as i32;
         let bits = p.to_bits() as i32;
         let moved = f32::from_bits((bits + if p < 0.0 { -of_i } else { of_i }) as u32);
-        if p.abs() < ORIGIN {
-            p + FLOAT_SCALE * n
+        if p.abs() < ORIGIN * s {
+            p + FLOAT_SCALE * s * n
         } else {
             moved
         }

@@ -33,6 +33,7 @@ pub mod lights;
 pub mod materials;
 pub mod memory;
 pub mod monitor;
+pub mod output;
 pub mod partial;
 pub mod plot;
 pub mod progress;

@@ -87,7 +87,7 @@ pub fn scene_sha256(path: &Path) -> Result<String, String> {
     Ok(hash.finalize().iter().map(|b| format!("{b:02x}")).collect())
 }
 
-/// Writes `film` (passes `header.passes`) to `path` through a temporary file.
+/// Writes `film` (passes `header.passes`) to `path`, whole or not at all.
 pub fn write(path: &Path, header: &PartialHeader, film: &Film) -> Result<(), String> {
     let fail = |e: std::io::Error| format!("cannot write {}: {e}", path.display());
     let json = serde_json::to_vec(header).expect("a header serialises");
@@ -98,10 +98,10 @@ pub fn write(path: &Path, header: &PartialHeader, film: &Film) -> Result<(), Str
     for value in film.pixel_sums() {
         bytes.extend_from_slice(&value.to_le_bytes());
     }
-    let temporary = path.with_extension("partial.tmp");
-    let mut file = std::fs::File::create(&temporary).map_err(fail)?;
-    file.write_all(&bytes).and_then(|()| file.sync_all()).map_err(fail)?;
-    std::fs::rename(&temporary, path).map_err(fail)
+    crate::output::write_whole(path, |temporary| {
+        let mut file = std::fs::File::create(temporary).map_err(fail)?;
+        file.write_all(&bytes).and_then(|()| file.sync_all()).map_err(fail)
+    })
 }
 
 /// The header of a film with `film`'s totals.

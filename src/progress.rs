@@ -11,6 +11,14 @@ pub enum ProgressStyle {
     None,
 }
 
+/// Prints one JSON line on stdout. A reader that has gone away (a closed pipe) does not stop the
+/// render: its frames are still written.
+fn json_line(line: serde_json::Value) {
+    use std::io::Write;
+    let mut stdout = std::io::stdout().lock();
+    let _ = writeln!(stdout, "{line}").and_then(|()| stdout.flush());
+}
+
 /// Shows passes as they finish.
 pub struct Progress {
     style: ProgressStyle,
@@ -47,11 +55,8 @@ impl Progress {
     pub fn update(&self, frames: &[i32], pass: u64, elapsed_s: f64) {
         match self.style {
             ProgressStyle::Bar => self.bar.as_ref().expect("bar style has a bar").set_position(pass),
-            ProgressStyle::Json => println!(
-                "{}",
-                serde_json::json!({"frame": frames[0], "frames": frames, "pass": pass, "passes": self.limit,
-                    "elapsed_s": elapsed_s})
-            ),
+            ProgressStyle::Json => json_line(serde_json::json!({"frame": frames[0], "frames": frames,
+                "pass": pass, "passes": self.limit, "elapsed_s": elapsed_s})),
             ProgressStyle::None => {}
         }
     }
@@ -74,11 +79,11 @@ impl Progress {
         stopped_by: &str,
     ) {
         match style {
-            ProgressStyle::Json => println!(
-                "{}",
-                serde_json::json!({"frame": frame, "written": path.display().to_string(), "passes": passes,
-                    "elapsed_s": elapsed_s, "stopped_by": stopped_by, "peak_memory_mib": crate::memory::peak_mib()})
-            ),
+            ProgressStyle::Json => {
+                json_line(serde_json::json!({"frame": frame, "written": path.display().to_string(),
+                "passes": passes, "elapsed_s": elapsed_s, "stopped_by": stopped_by,
+                "peak_memory_mib": crate::memory::peak_mib()}))
+            }
             ProgressStyle::Bar => {
                 eprintln!("caustic: wrote {} ({passes} passes, {elapsed_s:.1} s)", path.display())
             }

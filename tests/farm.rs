@@ -19,7 +19,8 @@ fn available(program: &str) -> bool {
 }
 
 fn assert_ran(output: Output, what: &str) {
-    let text = format!("{}{}", String::from_utf8_lossy(&output.stdout), String::from_utf8_lossy(&output.stderr));
+    let text =
+        format!("{}{}", String::from_utf8_lossy(&output.stdout), String::from_utf8_lossy(&output.stderr));
     eprintln!("{text}");
     assert!(output.status.success(), "{what} failed:\n{text}");
 }
@@ -45,7 +46,8 @@ fn farm_python() -> PathBuf {
     let python = venv.join("bin").join("python");
     let ready = venv.join(format!("ready-{}", PACKAGES.join("-")));
     if !ready.exists() {
-        let status = Command::new("python3").args(["-m", "venv"]).arg(&venv).status().expect("python3 -m venv");
+        let status =
+            Command::new("python3").args(["-m", "venv"]).arg(&venv).status().expect("python3 -m venv");
         assert!(status.success(), "cannot create {}", venv.display());
         let status = Command::new(&python).args(["-m", "pip", "install", "--quiet"]).args(PACKAGES).status();
         assert!(status.is_ok_and(|s| s.success()), "cannot install {}", PACKAGES.join(", "));

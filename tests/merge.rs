@@ -23,20 +23,14 @@ fn shot_settings(out: &Path) -> RenderSettings {
 
 /// Renders passes `passes` of `base`'s frames as partial results into `out`; gives frame 1's file.
 fn partial(base: &RenderSettings, out: &Path, passes: std::ops::Range<u64>) -> PathBuf {
-    let s = RenderSettings { passes: None, out_dir: out.to_path_buf(), partial_passes: Some(passes.clone()), ..base.clone() };
+    let s = RenderSettings {
+        passes: None,
+        out_dir: out.to_path_buf(),
+        partial_passes: Some(passes.clone()),
+        ..base.clone()
+    };
     render_frames(&s);
     caustic::partial::partial_path(out, 1, &passes)
-}
-
-fn channels(path: &Path) -> Vec<(String, Vec<f32>)> {
-    let image = exr::prelude::read_all_flat_layers_from_file(path).unwrap();
-    let layer = &image.layer_data[0];
-    layer
-        .channel_data
-        .list
-        .iter()
-        .map(|c| (c.name.to_string(), c.sample_data.values_as_f32().collect()))
-        .collect()
 }
 
 /// Passes 0..3 and 3..8 merged give the 8-pass render's Combined, Error and Variance channels
@@ -56,10 +50,11 @@ fn merged_pass_ranges_equal_the_whole_run() {
     for (path, film) in merged {
         assert_eq!(film.passes, 8);
         let name = path.file_name().unwrap();
-        let (a, b) = (channels(&path), channels(&dir.path().join("whole").join(name)));
+        let (a, b) = (exr_channels(&path), exr_channels(&dir.path().join("whole").join(name)));
         assert_eq!(a.iter().map(|c| &c.0).collect::<Vec<_>>(), b.iter().map(|c| &c.0).collect::<Vec<_>>());
         for ((channel, x), (_, y)) in a.iter().zip(&b) {
-            let worst = x.iter().zip(y).map(|(x, y)| (x - y).abs() / (1e-6 * y.abs()).max(1e-30)).fold(0.0, f32::max);
+            let worst =
+                x.iter().zip(y).map(|(x, y)| (x - y).abs() / (1e-6 * y.abs()).max(1e-30)).fold(0.0, f32::max);
             assert!(worst <= 1.0, "{name:?} {channel}: differs by {worst} times the tolerance");
         }
     }
@@ -89,23 +84,36 @@ fn merges_that_do_not_add_up_are_refused() {
     let overlapping = partial(&base, &dir.path().join("c"), 2..6);
     let late = partial(&base, &dir.path().join("d"), 5..8);
     let other_seed = partial(&RenderSettings { seed: 7, ..base.clone() }, &dir.path().join("e"), 4..8);
-    let other_scene_settings = RenderSettings { scene: bundled_scene("shot_moving_camera.gltf"), ..base.clone() };
+    let other_scene_settings =
+        RenderSettings { scene: bundled_scene("shot_moving_camera.gltf"), ..base.clone() };
     let other_scene = partial(&other_scene_settings, &dir.path().join("f"), 4..8);
     let frame_two = caustic::partial::partial_path(&dir.path().join("b"), 2, &(4..8));
 
     assert_mentions(&merge_error(&[a.clone(), other_seed]), &["do not belong together", "seed 1 vs 7"]);
-    assert_mentions(&merge_error(&[a.clone(), other_scene]), &["scenes differ", "shot.gltf", "shot_moving_camera.gltf"]);
-    assert_mentions(&merge_error(&[a.clone(), overlapping]), &["frame 1", "passes 0..4", "passes 2..6", "overlap"]);
+    assert_mentions(
+        &merge_error(&[a.clone(), other_scene]),
+        &["scenes differ", "shot.gltf", "shot_moving_camera.gltf"],
+    );
+    assert_mentions(
+        &merge_error(&[a.clone(), overlapping]),
+        &["frame 1", "passes 0..4", "passes 2..6", "overlap"],
+    );
     assert_mentions(&merge_error(&[a.clone(), late]), &["frame 1", "passes 4..5 are missing"]);
     assert_mentions(&merge_error(&[b.clone()]), &["frame 1", "passes 0..4 are missing"]);
     // Frame 2's half alone is incomplete even beside frame 1's whole range.
-    assert_mentions(&merge_error(&[a.clone(), b.clone(), frame_two]), &["frame 2", "passes 0..4 are missing"]);
+    assert_mentions(
+        &merge_error(&[a.clone(), b.clone(), frame_two]),
+        &["frame 2", "passes 0..4 are missing"],
+    );
     // Damaged and foreign files.
     let truncated = dir.path().join("truncated.partial");
     let bytes = std::fs::read(&a).unwrap();
     std::fs::write(&truncated, &bytes[..bytes.len() - 100]).unwrap();
     assert_mentions(&merge_error(&[truncated]), &["truncated.partial", "truncated or damaged"]);
-    assert_mentions(&merge_error(&[bundled_scene("shot.gltf")]), &["shot.gltf", "not a Caustic partial result"]);
+    assert_mentions(
+        &merge_error(&[bundled_scene("shot.gltf")]),
+        &["shot.gltf", "not a Caustic partial result"],
+    );
 }
 
 /// `--pass-range` and `--partial` go together, and a range must hold passes.

@@ -24,20 +24,6 @@ fn log_slope(points: &[(f64, f64)]) -> f64 {
     sxy / sxx
 }
 
-/// Six faces of the box [lo, hi], counter-clockwise from outside.
-fn box_triangles(lo: [f32; 3], hi: [f32; 3]) -> Vec<[[f32; 3]; 3]> {
-    let p = |x: usize, y: usize, z: usize| [[lo[0], hi[0]][x], [lo[1], hi[1]][y], [lo[2], hi[2]][z]];
-    let quads = [
-        [p(0, 0, 0), p(0, 0, 1), p(0, 1, 1), p(0, 1, 0)],
-        [p(1, 0, 0), p(1, 1, 0), p(1, 1, 1), p(1, 0, 1)],
-        [p(0, 0, 0), p(1, 0, 0), p(1, 0, 1), p(0, 0, 1)],
-        [p(0, 1, 0), p(0, 1, 1), p(1, 1, 1), p(1, 1, 0)],
-        [p(0, 0, 0), p(0, 1, 0), p(1, 1, 0), p(1, 0, 0)],
-        [p(0, 0, 1), p(1, 0, 1), p(1, 1, 1), p(0, 1, 1)],
-    ];
-    quads.iter().flat_map(|q| [[q[0], q[1], q[2]], [q[0], q[2], q[3]]]).collect()
-}
-
 /// A spot light with a smooth falloff shines through a glass slab onto a white floor: the floor
 /// under the slab is lit only by photons (its shadow for direct light), smoothly curved inside
 /// and cut sharply at the slab's edge (a caustic edge). The camera, under the slab, sees the

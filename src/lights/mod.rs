@@ -125,6 +125,11 @@ fn disc_origin(sphere: &BoundingSphere, direction: Vec3, u: Vec2) -> Vec3 {
     sphere.centre - direction * sphere.radius + t * d.x + b * d.y
 }
 
+/// The largest coordinate of a triangle's corners.
+fn corners_scale(c: &[Vec3; 3]) -> f32 {
+    c.iter().map(|v| v.abs().max_element()).fold(0.0, f32::max)
+}
+
 fn triangle_area(c: &[Vec3; 3]) -> f32 {
     0.5 * (c[1] - c[0]).cross(c[2] - c[0]).length()
 }
@@ -284,7 +289,12 @@ impl Light {
                 let local = square_to_cosine_hemisphere(u);
                 let direction = (t * local.x + b * local.y + n * local.z).normalize();
                 EmittedPhoton {
-                    origin: offset_origin(point_in_triangle(corners, u_position), n, direction),
+                    origin: offset_origin(
+                        point_in_triangle(corners, u_position),
+                        n,
+                        direction,
+                        corners_scale(corners),
+                    ),
                     direction,
                     flux: spectral(radiance, lambda_nm) * PI * triangle_area(corners) * sides,
                 }

@@ -43,6 +43,18 @@ pub fn sample(ior: f32, frame: ShadingFrame, wo: Vec3, u: f32, mode: Transport) 
     Some(BsdfSample { wi, weight, pdf: 0.0, is_delta: true })
 }
 
+/// Reflects or transmits `wo` at a thin dielectric wall of index `ior`: the light reflected by its
+/// two faces, inner reflections included, is `R + T^2 R / (1 - R^2)` of it (pbrt-v4's
+/// ThinDielectricBxDF); the rest passes straight through, unbent and unscaled (the wall's two
+/// refractions cancel).
+pub fn sample_thin(ior: f32, frame: ShadingFrame, wo: Vec3, u: f32) -> Option<BsdfSample> {
+    let n = face_toward(frame.n, wo);
+    let r = fresnel_dielectric(n.dot(wo).min(1.0), ior);
+    let reflected = if r < 1.0 { r + (1.0 - r) * (1.0 - r) * r / (1.0 - r * r) } else { 1.0 };
+    let wi = if u < reflected { reflect(wo, n) } else { -wo };
+    Some(BsdfSample { wi, weight: 1.0, pdf: 0.0, is_delta: true })
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -52,6 +64,21 @@ mod tests {
         assert!((fresnel_dielectric(1.0, 1.5) - 0.04).abs() < 1e-6);
         assert_eq!(fresnel_dielectric(0.1, 1.0 / 1.5), 1.0);
         assert!(fresnel_dielectric(1.0, 1.0) < 1e-12);
+    }
+
+    #[test]
+    fn a_thin_wall_transmits_unbent_and_reflects_both_faces() {
+        let wo = Vec3::new(0.6, 0.0, 0.8);
+        let frame = ShadingFrame { n: Vec3::Z, ng: Vec3::Z };
+        let through = sample_thin(1.5, frame, wo, 0.999).unwrap();
+        assert!((through.wi + wo).length() < 1e-6, "{:?}", through.wi);
+        let back = sample_thin(1.5, frame, wo, 0.0).unwrap();
+        assert!((back.wi - Vec3::new(-0.6, 0.0, 0.8)).length() < 1e-6);
+        // At normal incidence a 1.5 wall reflects 2R / (1 + R) with R = 0.04.
+        let reflected = (0..10_000)
+            .filter(|&i| sample_thin(1.5, frame, Vec3::Z, (i as f32 + 0.5) / 1e4).unwrap().wi.z > 0.0)
+            .count();
+        assert!((reflected as f32 / 1e4 - 0.08 / 1.04).abs() < 2e-4, "{reflected}");
     }
 
     #[test]

@@ -54,6 +54,9 @@ pub struct Material {
     pub emission: Option<RgbSpectrum>,
     /// Whether emission leaves both faces (meshes) or only the front (area lights).
     pub emits_both_sides: bool,
+    /// Transmission through a thin wall (an open mesh: a window pane modelled as a plane) rather
+    /// than into a solid: glTF's reading of transmission without a volume.
+    pub thin: bool,
 }
 
 impl Material {
@@ -68,6 +71,7 @@ impl Material {
             ior: Dispersion::Constant(1.5),
             emission: None,
             emits_both_sides: true,
+            thin: false,
         }
     }
 
@@ -93,7 +97,8 @@ impl Material {
     /// picks a lobe where the material mixes several.
     pub fn bsdf(&self, uv: Vec2, lambda_nm: f32, u_lobe: f32) -> Bsdf {
         if u_lobe < self.transmission {
-            return Bsdf::Dielectric { ior: self.ior.index(lambda_nm) };
+            let ior = self.ior.index(lambda_nm);
+            return if self.thin { Bsdf::ThinDielectric { ior } } else { Bsdf::Dielectric { ior } };
         }
         let reflectance = self.reflectance(uv, lambda_nm);
         let u_lobe = (u_lobe - self.transmission) / (1.0 - self.transmission);
@@ -136,6 +141,12 @@ pub enum Bsdf {
         /// Index of refraction of the inside relative to the outside.
         ior: f32,
     },
+    /// A thin dielectric wall: Fresnel reflection (with the wall's inner reflections summed) or
+    /// straight transmission, never bent.
+    ThinDielectric {
+        /// Index of refraction of the wall.
+        ior: f32,
+    },
     /// Absorbs everything (a light's own surface).
     Black,
 }
@@ -165,7 +176,7 @@ pub struct BsdfSample {
 impl Bsdf {
     /// Whether every direction it scatters into is a delta (mirror or refraction).
     pub fn is_delta(&self) -> bool {
-        matches!(self, Bsdf::Conductor { .. } | Bsdf::Dielectric { .. })
+        matches!(self, Bsdf::Conductor { .. } | Bsdf::Dielectric { .. } | Bsdf::ThinDielectric { .. })
     }
 
     /// The BSDF value `f(wo, wi)` (zero for delta lobes) with shading normal `n`.
@@ -201,6 +212,7 @@ impl Bsdf {
             Bsdf::Conductor { f0 } => conductor::sample_smooth(f0, n, wo),
             Bsdf::RoughConductor { f0, alpha } => conductor::sample_rough(f0, alpha, n, wo, u),
             Bsdf::Dielectric { ior } => dielectric::sample(ior, frame, wo, u_lobe, mode),
+            Bsdf::ThinDielectric { ior } => dielectric::sample_thin(ior, frame, wo, u_lobe),
             Bsdf::Black => None,
         }
     }

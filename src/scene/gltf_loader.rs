@@ -10,6 +10,8 @@
 
 use std::path::Path;
 
+use super::gltf_checks;
+
 use glam::{Quat, Vec2, Vec3, Vec4};
 use gltf::animation::util::ReadOutputs;
 use gltf::animation::Property;
@@ -43,6 +45,8 @@ struct Builder<'a> {
     wanted_camera: Option<String>,
     warnings: Vec<String>,
     material_offset: u32,
+    /// The thin-wall copy of each transmissive material that open meshes use.
+    thin_materials: std::collections::HashMap<u32, u32>,
 }
 
 /// Loads `path` into a [`Description`].
@@ -51,7 +55,17 @@ pub fn load(path: &Path) -> Result<Description, SceneError> {
     if !path.exists() {
         return Err(fail("no such file".into()));
     }
-    let (document, buffers, images) = gltf::import(path).map_err(|e| fail(describe_import_error(e)))?;
+    // The references are checked before anything they name is read, and the mesh accessor
+    // indices before the gltf crate validates the file (its validation indexes them unchecked).
+    let bytes = std::fs::read(path).map_err(|e| fail(format!("cannot read the file: {e}")))?;
+    let unchecked = gltf::Gltf::from_slice_without_validation(&bytes)
+        .map_err(|e| fail(gltf_checks::describe_import_error(e)))?;
+    gltf_checks::check_indices(unchecked.document.as_json()).map_err(fail)?;
+    let parsed = gltf::Gltf::from_slice(&bytes).map_err(|e| fail(gltf_checks::describe_import_error(e)))?;
+    gltf_checks::check_references(&parsed.document).map_err(fail)?;
+    let (document, buffers, images) =
+        gltf::import(path).map_err(|e| fail(gltf_checks::describe_import_error(e)))?;
+    gltf_checks::check_accessors(&document, &buffers).map_err(fail)?;
     let gltf_scene = document
         .default_scene()
         .or_else(|| document.scenes().next())
@@ -72,6 +86,7 @@ pub fn load(path: &Path) -> Result<Description, SceneError> {
         wanted_camera: scene_extras.camera.clone(),
         warnings: Vec::new(),
         material_offset,
+        thin_materials: Default::default(),
     };
     for node in gltf_scene.nodes() {
         builder.visit(&node, &rig).map_err(fail)?;
@@ -118,12 +133,20 @@ fn rig(document: &gltf::Document, buffers: &[gltf::buffer::Data]) -> Result<Rig,
         .nodes()
         .map(|n| {
             let (t, r, s) = n.transform().decomposed();
-            NodeMotion {
-                rest: (Vec3::from(t), Quat::from_array(r).normalize(), Vec3::from(s)),
-                ..Default::default()
-            }
+            let finite = t.iter().chain(&r).chain(&s).all(|v| v.is_finite());
+            finite
+                .then(|| NodeMotion {
+                    rest: (Vec3::from(t), Quat::from_array(r).normalize(), Vec3::from(s)),
+                    ..Default::default()
+                })
+                .ok_or_else(|| {
+                    format!(
+                        "node '{}': its transform has values that are not finite numbers",
+                        n.name().unwrap_or("unnamed")
+                    )
+                })
         })
-        .collect();
+        .collect::<Result<_, _>>()?;
     for node in document.nodes() {
         for child in node.children() {
             nodes[child.index()].parent = Some(node.index());
@@ -149,6 +172,11 @@ fn rig(document: &gltf::Document, buffers: &[gltf::buffer::Data]) -> Result<Rig,
                 Some(ReadOutputs::MorphTargetWeights(_)) => continue,
                 None => return Err(format!("animation of node '{name}': no key values")),
             };
+            if !times.iter().all(|t| t.is_finite()) || !values.iter().all(|v| v.is_finite()) {
+                return Err(format!(
+                    "animation of node '{name}': key times or values are not finite numbers"
+                ));
+            }
             let per_key = if interpolation == Interpolation::CubicSpline { 3 } else { 1 };
             let sorted = times.windows(2).all(|w| w[0] < w[1]);
             if times.is_empty() || values.len() != per_key * times.len() || !sorted {
@@ -189,26 +217,12 @@ fn shutter(extras: Option<&ShutterExtras>) -> Result<Shutter, String> {
     Ok(Shutter { open, length: s.length_frames })
 }
 
-/// A message for the gltf crate's errors that says what the user must fix.
-fn describe_import_error(error: gltf::Error) -> String {
-    match error {
-        gltf::Error::Io(e) => format!("cannot read the file or a file it references: {e}"),
-        gltf::Error::Deserialize(e) => format!("not a valid glTF file (malformed JSON): {e}"),
-        gltf::Error::Validation(errors) => {
-            let list: Vec<String> = errors.iter().map(|(path, e)| format!("{path}: {e}")).collect();
-            format!(
-                "not a valid glTF 2.0 file (unsupported required extension or invalid field): {}",
-                list.join("; ")
-            )
-        }
-        other => format!("cannot load glTF: {other}"),
-    }
-}
-
 /// The world from the scene extras; an image path is relative to the glTF file's folder.
 fn world(w: &extras::WorldExtras, gltf_path: &Path) -> Result<World, String> {
     match &w.image {
         Some(image) => {
+            gltf_checks::check_relative(image)
+                .map_err(|why| format!("scene extras `caustic.world.image` '{image}': {why}"))?;
             let path = gltf_path.parent().unwrap_or(Path::new(".")).join(image);
             World::from_image(&path, w.strength, w.rotation_deg)
                 .map_err(|e| format!("scene extras `caustic.world.image`: {e}"))
@@ -358,6 +372,49 @@ impl Builder<'_> {
 
     fn add_mesh(&mut self, mesh: &gltf::Mesh, node: usize) -> Result<(), String> {
         let name = mesh.name().unwrap_or("unnamed");
+        let first = self.meshes.len();
+        self.add_primitives(mesh, node, name)?;
+        self.thin_walls_of_open_glass(first, name);
+        Ok(())
+    }
+
+    /// Glass on an open mesh (a pane modelled as a plane) has no inside to refract into: its
+    /// transmissive primitives get a thin-wall copy of their material, as glTF reads transmission
+    /// without a volume.
+    fn thin_walls_of_open_glass(&mut self, first: usize, name: &str) {
+        let is_glass = |b: &Self, t: &TriangleRef| b.materials[t.material as usize].transmission > 0.0;
+        let instances = &self.meshes[first..];
+        if !instances.iter().any(|m| m.triangles.iter().any(|t| is_glass(self, t))) || is_closed(instances) {
+            return;
+        }
+        for i in first..self.meshes.len() {
+            for t in 0..self.meshes[i].triangles.len() {
+                let material = self.meshes[i].triangles[t].material;
+                if self.materials[material as usize].transmission > 0.0 {
+                    self.meshes[i].triangles[t].material = self.thin_material(material);
+                }
+            }
+        }
+        self.warnings.push(format!(
+            "mesh '{name}': its glass is an open surface, rendered as a thin wall (no refraction); close the mesh for solid glass"
+        ));
+    }
+
+    /// The thin-wall copy of `material`.
+    fn thin_material(&mut self, material: u32) -> u32 {
+        if let Some(&thin) = self.thin_materials.get(&material) {
+            return thin;
+        }
+        let mut copy = self.materials[material as usize].clone();
+        copy.thin = true;
+        self.materials.push(copy);
+        let thin = self.materials.len() as u32 - 1;
+        self.thin_materials.insert(material, thin);
+        thin
+    }
+
+    /// Adds each triangle primitive of `mesh` as a mesh instance of `node`.
+    fn add_primitives(&mut self, mesh: &gltf::Mesh, node: usize, name: &str) -> Result<(), String> {
         for primitive in mesh.primitives() {
             if primitive.mode() != gltf::mesh::Mode::Triangles {
                 self.warnings.push(format!(
@@ -381,6 +438,11 @@ impl Builder<'_> {
                 .read_tex_coords(0)
                 .map(|t| t.into_f32().map(Vec2::from).collect())
                 .unwrap_or_else(|| vec![Vec2::ZERO; count]);
+            // Attributes must have one entry per position; a mismatched one is dropped, not read past.
+            let (normals, uvs) = (
+                matching_attribute(normals, count, "NORMAL", name, &mut self.warnings),
+                matching_attribute(uvs, count, "TEXCOORD_0", name, &mut self.warnings),
+            );
             let indices: Vec<u32> = match reader.read_indices() {
                 Some(indices) => indices.into_u32().collect(),
                 None => (0..count as u32).collect(),
@@ -417,6 +479,51 @@ impl Builder<'_> {
     }
 }
 
+/// `values` when it has `count` entries (one per position); otherwise zeros, with a warning.
+fn matching_attribute<T: Default + Clone>(
+    values: Vec<T>,
+    count: usize,
+    attribute: &str,
+    mesh: &str,
+    warnings: &mut Vec<String>,
+) -> Vec<T> {
+    if values.len() == count {
+        return values;
+    }
+    warnings.push(format!(
+        "mesh '{mesh}': {attribute} has {} entries for {count} positions; ignored",
+        values.len()
+    ));
+    vec![T::default(); count]
+}
+
+/// Whether the triangles of `instances` close up: every edge (matched by its end positions,
+/// rounded to a millionth of the mesh's size, so that seams whose vertices differ in their last
+/// bits still match) is shared by an even number of triangles.
+fn is_closed(instances: &[MeshInstance]) -> bool {
+    let corners = || {
+        instances
+            .iter()
+            .flat_map(|m| m.triangles.iter().flat_map(|t| t.vertices.map(|v| m.positions[v as usize])))
+    };
+    let Some((lo, hi)) = corners().map(|p| (p, p)).reduce(|(a, b), (c, d)| (a.min(c), b.max(d))) else {
+        return true;
+    };
+    let quantum = ((hi - lo).max_element() * 1e-6).max(f32::MIN_POSITIVE);
+    let key = |p: Vec3| ((p - lo) / quantum).round().as_i64vec3().to_array();
+    let mut edges: std::collections::HashMap<([i64; 3], [i64; 3]), u32> = Default::default();
+    for m in instances {
+        for t in &m.triangles {
+            let [a, b, c] = t.vertices.map(|v| key(m.positions[v as usize]));
+            for (p, q) in [(a, b), (b, c), (c, a)] {
+                *edges.entry(if p < q { (p, q) } else { (q, p) }).or_default() += 1;
+            }
+        }
+    }
+    edges.values().all(|n| n % 2 == 0)
+}
+
 fn is_valid_triangle(c: &[Vec3; 3]) -> bool {
-    c.iter().all(|v| v.is_finite()) && (c[1] - c[0]).cross(c[2] - c[0]).length_squared() > 0.0
+    let area2 = (c[1] - c[0]).cross(c[2] - c[0]).length_squared();
+    c.iter().all(|v| v.is_finite()) && area2 > 0.0 && area2.is_finite()
 }

@@ -33,6 +33,7 @@ pub fn material(m: &gltf::Material, images: &[gltf::image::Data]) -> Result<Mate
         ior: dispersion_law(m).map_err(|e| format!("material '{}': {e}", m.name().unwrap_or("unnamed")))?,
         emission: (emission.max_element() > 0.0).then(|| RgbSpectrum::illuminant(emission)),
         emits_both_sides: true,
+        thin: false,
     })
 }
 

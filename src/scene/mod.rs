@@ -9,6 +9,7 @@
 pub mod animation;
 pub mod description;
 pub mod extras;
+mod gltf_checks;
 mod gltf_loader;
 mod gltf_materials;
 pub mod pose;
@@ -77,13 +78,16 @@ impl Geometry {
         let n = interpolate(&self.normals).normalize_or_zero();
         let n = if n == Vec3::ZERO { ng } else { n };
         let uv = self.uvs[i0] * w[0] + self.uvs[i1] * w[1] + self.uvs[i2] * w[2];
-        Surface { p, frame: ShadingFrame { n, ng }, uv, material: t.material }
+        let scale = [i0, i1, i2].iter().map(|&i| self.positions[i].abs().max_element()).fold(0.0, f32::max);
+        Surface { p, frame: ShadingFrame { n, ng }, uv, material: t.material, scale }
     }
 
-    /// The smallest and largest corner, or `None` when empty.
+    /// The smallest and largest corner of the finite vertices, or `None` when there are none
+    /// (vertices of skipped triangles may be NaN or infinite).
     pub fn bounds(&self) -> Option<(Vec3, Vec3)> {
-        let first = *self.positions.first()?;
-        Some(self.positions.iter().fold((first, first), |(lo, hi), &p| (lo.min(p), hi.max(p))))
+        let mut finite = self.positions.iter().copied().filter(|p| p.is_finite());
+        let first = finite.next()?;
+        Some(finite.fold((first, first), |(lo, hi), p| (lo.min(p), hi.max(p))))
     }
 }
 
@@ -128,6 +132,8 @@ pub struct Surface {
     pub uv: Vec2,
     /// Index into `Scene::materials`.
     pub material: u32,
+    /// The largest coordinate of its triangle's corners (how far rounding can have moved `p`).
+    pub scale: f32,
 }
 
 impl Scene {

@@ -85,7 +85,7 @@ impl DirectLight<'_> {
             return DirectTerm::ZERO;
         }
         stats.shadow_rays += 1;
-        let origin = offset_origin(point.p, ng, sample.wi);
+        let origin = offset_origin(point.p, ng, sample.wi, point.scale);
         let t_max = if sample.distance.is_finite() { sample.distance * (1.0 - 1e-4) } else { f32::INFINITY };
         let ray = ShadowRay { origin, direction: sample.wi, t_max };
         if renderer.accel.occluded(origin, sample.wi, t_max) {
@@ -113,7 +113,7 @@ impl DirectLight<'_> {
             return DirectTerm::ZERO;
         }
         stats.shadow_rays += 1;
-        let origin = offset_origin(point.p, point.frame.ng, sample.wi);
+        let origin = offset_origin(point.p, point.frame.ng, sample.wi, point.scale);
         let light_pdf = |index: usize, q: Vec3| {
             renderer.light_choice.probability(index) * scene.lights[index].pdf_incident(point.p, sample.wi, q)
         };

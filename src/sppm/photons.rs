@@ -112,7 +112,7 @@ pub fn continue_photon(
             break;
         }
         state.flux *= sample.weight / survive;
-        state.origin = offset_origin(surface.p, surface.frame.ng, sample.wi);
+        state.origin = offset_origin(surface.p, surface.frame.ng, sample.wi, surface.scale);
         state.direction = sample.wi;
         state.depth += 1;
     }

@@ -28,6 +28,8 @@ pub struct VisiblePoint {
     pub bsdf: Bsdf,
     /// Path throughput from the camera to here.
     pub beta: f32,
+    /// The largest coordinate of its triangle (for offsetting rays that leave it).
+    pub scale: f32,
 }
 
 /// Settings of the SPPM passes.

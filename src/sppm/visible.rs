@@ -110,7 +110,14 @@ pub fn continue_eye_path(
             break;
         }
         if !bsdf.is_delta() {
-            let visible = VisiblePoint { p: surface.p, frame: surface.frame, wo, bsdf, beta: state.beta };
+            let visible = VisiblePoint {
+                p: surface.p,
+                frame: surface.frame,
+                wo,
+                bsdf,
+                beta: state.beta,
+                scale: surface.scale,
+            };
             direct = DirectLight { renderer, lambda_nm: pass.lambda_nm, point: &visible }
                 .estimate(rng, &mut stats);
             radiance_before = state.radiance;
@@ -123,7 +130,7 @@ pub fn continue_eye_path(
             break;
         };
         state.beta *= sample.weight;
-        state.origin = offset_origin(surface.p, surface.frame.ng, sample.wi);
+        state.origin = offset_origin(surface.p, surface.frame.ng, sample.wi, surface.scale);
         state.direction = sample.wi;
         state.depth += 1;
     }

@@ -130,8 +130,9 @@ impl GltfBuilder {
         if kind == "VEC3" {
             let mut min = [f32::INFINITY; 3];
             let mut max = [f32::NEG_INFINITY; 3];
+            // Exporters write the bounds of the finite values (JSON has no NaN or infinity).
             for p in data.chunks(3) {
-                for k in 0..3 {
+                for k in (0..3).filter(|&k| p[k].is_finite()) {
                     min[k] = min[k].min(p[k]);
                     max[k] = max[k].max(p[k]);
                 }
@@ -218,7 +219,8 @@ impl GltfBuilder {
     pub fn sphere(&mut self, name: &str, centre: [f32; 3], radius: f32, rings: usize, material: usize) {
         let point = |ring: usize, segment: usize| {
             let theta = std::f32::consts::PI * ring as f32 / rings as f32;
-            let phi = std::f32::consts::PI * segment as f32 / rings as f32;
+            // The seam's last segment is the first again, so the mesh closes exactly.
+            let phi = std::f32::consts::PI * (segment % (2 * rings)) as f32 / rings as f32;
             glam::Vec3::new(theta.sin() * phi.cos(), theta.cos(), theta.sin() * phi.sin())
         };
         let (mut positions, mut normals) = (Vec::new(), Vec::new());
@@ -455,4 +457,30 @@ pub fn assert_matches_reference(name: &str, image: &Image, passes: u64) {
         folder.display(),
         failures.iter().take(5).cloned().collect::<Vec<_>>().join("; ")
     );
+}
+
+/// The 12 triangles of the axis-aligned box from `lo` to `hi`, counter-clockwise from outside.
+pub fn box_triangles(lo: [f32; 3], hi: [f32; 3]) -> Vec<[[f32; 3]; 3]> {
+    let p = |x: usize, y: usize, z: usize| [[lo[0], hi[0]][x], [lo[1], hi[1]][y], [lo[2], hi[2]][z]];
+    let quads = [
+        [p(0, 0, 0), p(0, 0, 1), p(0, 1, 1), p(0, 1, 0)],
+        [p(1, 0, 0), p(1, 1, 0), p(1, 1, 1), p(1, 0, 1)],
+        [p(0, 0, 0), p(1, 0, 0), p(1, 0, 1), p(0, 0, 1)],
+        [p(0, 1, 0), p(0, 1, 1), p(1, 1, 1), p(1, 1, 0)],
+        [p(0, 0, 0), p(0, 1, 0), p(1, 1, 0), p(1, 0, 0)],
+        [p(0, 0, 1), p(1, 0, 1), p(1, 1, 1), p(0, 1, 1)],
+    ];
+    quads.iter().flat_map(|q| [[q[0], q[1], q[2]], [q[0], q[2], q[3]]]).collect()
+}
+
+/// Every channel of a one-part EXR, by name.
+pub fn exr_channels(path: &Path) -> Vec<(String, Vec<f32>)> {
+    let image = exr::prelude::read_all_flat_layers_from_file(path).unwrap();
+    let layer = &image.layer_data[0];
+    layer
+        .channel_data
+        .list
+        .iter()
+        .map(|c| (c.name.to_string(), c.sample_data.values_as_f32().collect()))
+        .collect()
 }

@@ -1,0 +1,169 @@
+//! Fuzzing the scene loader (a property test, bounded so it fits in the test command): arbitrary
+//! bytes, real glTF files with bytes flipped or cut, and real glTF JSON with values replaced by
+//! hostile ones (huge counts, negative indices, wrong types) must load or be refused with a
+//! message — never panic. What loads is also posed and rendered for one tiny pass.
+//!
+//! Inputs that once crashed are kept in tests/fuzz/ and loaded by `kept_crashes_stay_fixed`.
+//! The test command runs 200 cases per property from a fixed seed (the same inputs every run, so
+//! CI never fails by chance); to search further, `CAUSTIC_FUZZ_CASES=5000 CAUSTIC_FUZZ_SEED=random
+//! cargo test --release --test fuzz` (or a number for the seed).
+
+use caustic::frames::{self, RenderSettings};
+use caustic::scene::Description;
+use proptest::prelude::*;
+use rand::{Rng, RngExt, SeedableRng};
+use serde_json::{json, Value};
+use std::path::{Path, PathBuf};
+
+fn cases() -> u32 {
+    std::env::var("CAUSTIC_FUZZ_CASES").ok().and_then(|n| n.parse().ok()).unwrap_or(200)
+}
+
+fn rng_seed() -> proptest::test_runner::RngSeed {
+    use proptest::test_runner::RngSeed;
+    match std::env::var("CAUSTIC_FUZZ_SEED").as_deref() {
+        Ok("random") => RngSeed::Random,
+        Ok(n) => RngSeed::Fixed(n.parse().expect("CAUSTIC_FUZZ_SEED: a number or 'random'")),
+        Err(_) => RngSeed::Fixed(0x0ca5_71c0),
+    }
+}
+
+fn scenes() -> PathBuf {
+    Path::new(env!("CARGO_MANIFEST_DIR")).join("scenes")
+}
+
+/// Loads `path` and, when it loads, renders one 4x4 pass with 16 photons; a panic anywhere fails.
+fn load_and_render(path: &Path) -> Result<(), String> {
+    let outcome = std::panic::catch_unwind(|| {
+        if Description::load(path).is_err() {
+            return;
+        }
+        let out = path.with_extension("out");
+        let mut s = RenderSettings::new(path, &out);
+        s.passes = Some(1);
+        s.resolution = Some([4, 4]);
+        s.photons = Some(16);
+        let _ = frames::render(&s);
+    });
+    outcome.map_err(|panic| {
+        let message = panic
+            .downcast_ref::<String>()
+            .cloned()
+            .or_else(|| panic.downcast_ref::<&str>().map(|s| s.to_string()));
+        format!("{} panicked: {}", path.display(), message.unwrap_or_default())
+    })
+}
+
+/// Writes `bytes` as `name` in a fresh folder beside copies of the bundled scenes' buffers (so
+/// relative references resolve) and loads it.
+fn try_bytes(name: &str, bytes: &[u8]) -> Result<(), String> {
+    let dir = tempfile::tempdir().unwrap();
+    for bin in ["furnace.bin", "cornell_animated.bin", "spot_glass.bin"] {
+        std::fs::copy(scenes().join(bin), dir.path().join(bin)).unwrap();
+    }
+    let path = dir.path().join(name);
+    std::fs::write(&path, bytes).unwrap();
+    let result = load_and_render(&path);
+    if result.is_err() {
+        // Keep the input for tests/fuzz/ (see kept_crashes_stay_fixed).
+        let _ = std::fs::copy(&path, std::env::temp_dir().join(format!("caustic-fuzz-crash-{name}")));
+    }
+    result
+}
+
+/// A value to put in place of any JSON value.
+fn hostile_value(rng: &mut impl Rng) -> Value {
+    let values = [
+        json!(1_000_000_000_000u64),
+        json!(-1),
+        json!(0),
+        json!(u32::MAX),
+        json!(1.5),
+        json!(-1e30),
+        json!(1e300),
+        json!("x"),
+        json!(null),
+        json!([]),
+        json!({}),
+        json!([0, 1, 2]),
+        json!(true),
+        json!(65535),
+    ];
+    values[rng.random_range(0..values.len())].clone()
+}
+
+/// Replaces one randomly chosen value inside `value` (or deletes an object key).
+fn mutate(value: &mut Value, rng: &mut impl Rng) {
+    let descend = rng.random_range(0..4) != 0;
+    match value {
+        Value::Object(map) if !map.is_empty() && descend => {
+            let key = map.keys().nth(rng.random_range(0..map.len())).unwrap().clone();
+            if rng.random_range(0..8) == 0 {
+                map.remove(&key);
+            } else {
+                mutate(map.get_mut(&key).unwrap(), rng);
+            }
+        }
+        Value::Array(list) if !list.is_empty() && descend => {
+            let i = rng.random_range(0..list.len());
+            mutate(&mut list[i], rng);
+        }
+        _ => *value = hostile_value(rng),
+    }
+}
+
+proptest! {
+    #![proptest_config(ProptestConfig { cases: cases(), failure_persistence: None, rng_seed: rng_seed(), ..ProptestConfig::default() })]
+
+    #[test]
+    fn arbitrary_bytes_never_panic(bytes in prop::collection::vec(any::<u8>(), 0..2048), glb in any::<bool>()) {
+        let mut bytes = bytes;
+        if glb && bytes.len() >= 12 {
+            // Make the header look like a glTF binary so the parser goes further.
+            bytes[..4].copy_from_slice(b"glTF");
+            bytes[4..8].copy_from_slice(&2u32.to_le_bytes());
+        }
+        let name = if glb { "fuzz.glb" } else { "fuzz.gltf" };
+        prop_assert_eq!(try_bytes(name, &bytes), Ok(()));
+    }
+
+    #[test]
+    fn real_files_with_bytes_flipped_or_cut_never_panic(seed in any::<u64>()) {
+        let mut rng = rand_pcg::Pcg64::seed_from_u64(seed);
+        let name = ["furnace.gltf", "cornell_animated.gltf", "prism.gltf"][rng.random_range(0..3)];
+        let mut bytes = std::fs::read(scenes().join(name)).unwrap();
+        for _ in 0..rng.random_range(1..6) {
+            let i = rng.random_range(0..bytes.len());
+            bytes[i] = rng.random();
+        }
+        if rng.random_range(0..3) == 0 {
+            bytes.truncate(rng.random_range(0..bytes.len()));
+        }
+        prop_assert_eq!(try_bytes("flipped.gltf", &bytes), Ok(()));
+    }
+
+    #[test]
+    fn real_json_with_hostile_values_never_panics(seed in any::<u64>()) {
+        let mut rng = rand_pcg::Pcg64::seed_from_u64(seed);
+        let name = ["furnace.gltf", "cornell_animated.gltf", "prism.gltf", "spot_glass.gltf"][rng.random_range(0..4)];
+        let mut doc: Value = serde_json::from_slice(&std::fs::read(scenes().join(name)).unwrap()).unwrap();
+        for _ in 0..rng.random_range(1..4) {
+            mutate(&mut doc, &mut rng);
+        }
+        prop_assert_eq!(try_bytes("mutated.gltf", doc.to_string().as_bytes()), Ok(()));
+    }
+}
+
+/// Inputs that crashed the loader once (tests/fuzz/*.gltf, *.glb) load or are refused cleanly.
+#[test]
+fn kept_crashes_stay_fixed() {
+    let kept = Path::new(env!("CARGO_MANIFEST_DIR")).join("tests").join("fuzz");
+    for entry in std::fs::read_dir(&kept).unwrap() {
+        let path = entry.unwrap().path();
+        if matches!(path.extension().and_then(|e| e.to_str()), Some("gltf" | "glb")) {
+            let bytes = std::fs::read(&path).unwrap();
+            let name = path.file_name().unwrap().to_str().unwrap().to_string();
+            try_bytes(&name, &bytes).unwrap();
+        }
+    }
+}

@@ -1,0 +1,258 @@
+//! Hostile input: every broken, malicious or impossible scene ends in one clear message and a
+//! non-zero exit — never a panic, a hang or an unbounded allocation — and nothing already on disk
+//! is lost.
+
+mod common;
+
+use common::*;
+use serde_json::{json, Value};
+use std::path::{Path, PathBuf};
+use std::process::{Command, Output, Stdio};
+use std::time::{Duration, Instant};
+
+/// Runs `command` (reading its output as it comes), failing the test if it takes more than 60
+/// seconds.
+fn run_within_a_minute(mut command: Command) -> Output {
+    let child = command.stdout(Stdio::piped()).stderr(Stdio::piped()).spawn().expect("start caustic");
+    let pid = child.id();
+    let (done, result) = std::sync::mpsc::channel();
+    std::thread::spawn(move || done.send(child.wait_with_output().expect("output")));
+    result.recv_timeout(Duration::from_secs(60)).unwrap_or_else(|_| {
+        let _ = Command::new("kill").args(["-9", &pid.to_string()]).status();
+        panic!("{command:?} still runs after a minute");
+    })
+}
+
+fn render_command(scene: &Path, out: &Path) -> Command {
+    let mut command = Command::new(env!("CARGO_BIN_EXE_caustic"));
+    command.args(["render", scene.to_str().unwrap(), "-o", out.to_str().unwrap()]);
+    command.args(["--passes", "1", "--resolution", "8x8", "--progress", "none"]);
+    command
+}
+
+/// The render of `scene` fails with every part of `expected` in its message, and no panic.
+fn assert_refused(scene: &Path, expected: &[&str]) {
+    let out = tempfile::tempdir().unwrap();
+    let output = run_within_a_minute(render_command(scene, out.path()));
+    let text = String::from_utf8_lossy(&output.stderr);
+    assert!(!output.status.success(), "{} rendered: {text}", scene.display());
+    assert!(!text.contains("panicked"), "{}: {text}", scene.display());
+    for part in expected {
+        assert!(text.contains(part), "{}: '{text}' does not mention '{part}'", scene.display());
+    }
+    assert!(std::fs::read_dir(out.path()).map_or(true, |mut d| d.next().is_none()), "it left files behind");
+}
+
+/// The bundled furnace (a .gltf with its .bin) copied to `dir` with `edit` applied to its JSON.
+fn furnace_edited(dir: &Path, name: &str, edit: impl FnOnce(&mut Value)) -> PathBuf {
+    let scenes = Path::new(env!("CARGO_MANIFEST_DIR")).join("scenes");
+    std::fs::copy(scenes.join("furnace.bin"), dir.join("furnace.bin")).unwrap();
+    let mut doc: Value =
+        serde_json::from_str(&std::fs::read_to_string(scenes.join("furnace.gltf")).unwrap()).unwrap();
+    edit(&mut doc);
+    let path = dir.join(name);
+    std::fs::write(&path, doc.to_string()).unwrap();
+    path
+}
+
+#[test]
+fn malformed_files_are_named() {
+    let dir = tempfile::tempdir().unwrap();
+    let d = dir.path();
+    // A truncated .glb.
+    let mut gltf = GltfBuilder::default();
+    let white = gltf.material(diffuse([0.8, 0.8, 0.8]));
+    gltf.quad_y("Floor", 0.0, 1.0, true, white);
+    gltf.camera([0.0, 1.0, 0.0], [0.0, -1.0, 0.0], 0.5);
+    let glb = gltf.write_glb(d, "whole");
+    let bytes = std::fs::read(&glb).unwrap();
+    for (name, cut) in [("header.glb", 10), ("half.glb", bytes.len() / 2), ("last_byte.glb", bytes.len() - 1)]
+    {
+        std::fs::write(d.join(name), &bytes[..cut]).unwrap();
+        assert_refused(&d.join(name), &[name, "glTF"]);
+    }
+    std::fs::write(d.join("json.gltf"), r#"{"hello": "world"}"#).unwrap();
+    assert_refused(&d.join("json.gltf"), &["json.gltf", "missing field `asset`"]);
+    std::fs::write(d.join("noise.gltf"), [0u8, 159, 146, 150, 7, 255]).unwrap();
+    assert_refused(&d.join("noise.gltf"), &["noise.gltf", "not a valid glTF file"]);
+}
+
+#[test]
+fn references_outside_the_scene_folder_are_refused() {
+    let dir = tempfile::tempdir().unwrap();
+    let d = dir.path();
+    let bin = d.join("furnace.bin");
+    let cases = [
+        ("absolute.gltf", bin.to_str().unwrap().to_string(), "absolute paths and URLs are refused"),
+        ("parent.gltf", "../furnace.bin".to_string(), "leaves the scene's folder"),
+        ("encoded.gltf", "sub/%2e%2e/%2E%2E/furnace.bin".to_string(), "leaves the scene's folder"),
+        ("url.gltf", "file:///etc/passwd".to_string(), "absolute paths and URLs are refused"),
+    ];
+    for (name, uri, why) in cases {
+        let path = furnace_edited(d, name, |doc| doc["buffers"][0]["uri"] = json!(uri));
+        assert_refused(&path, &[name, "buffer 0 refers to", why]);
+    }
+    let world = furnace_edited(d, "world.gltf", |doc| {
+        doc["scenes"][0]["extras"] = json!({"caustic": {"world": {"image": "/etc/sky.hdr"}}});
+    });
+    assert_refused(&world, &["caustic.world.image", "absolute paths"]);
+    let image = furnace_edited(d, "image.gltf", |doc| {
+        doc["images"] = json!([{"uri": "../../sky.png"}]);
+        doc["textures"] = json!([{"source": 0}]);
+    });
+    assert_refused(&image, &["image 0 refers to '../../sky.png'", "leaves the scene's folder"]);
+}
+
+#[test]
+fn data_that_runs_past_its_buffer_is_refused() {
+    let dir = tempfile::tempdir().unwrap();
+    let d = dir.path();
+    let cases: [(&str, fn(&mut Value), &[&str]); 6] = [
+        (
+            "count.gltf",
+            |doc| doc["accessors"][0]["count"] = json!(1_000_000_000_000u64),
+            &["accessor 0 (1000000000000 elements", "runs past buffer view 0"],
+        ),
+        (
+            "offset.gltf",
+            |doc| doc["accessors"][0]["byteOffset"] = json!(1_000_000),
+            &["accessor 0", "from byte 1000000", "runs past"],
+        ),
+        (
+            "view.gltf",
+            |doc| doc["bufferViews"][0]["byteLength"] = json!(1_000_000_000u64),
+            &["buffer view 0", "runs past buffer 0"],
+        ),
+        (
+            "buffer.gltf",
+            |doc| doc["buffers"][0]["byteLength"] = json!(1_000_000_000_000u64),
+            &["buffer 0", "expected 1000000000000 bytes"],
+        ),
+        (
+            "base64.gltf",
+            |doc| doc["buffers"][0]["uri"] = json!("data:application/octet-stream;base64,@@not base64@@"),
+            &["data URI is not valid base64"],
+        ),
+        (
+            "index.gltf",
+            |doc| {
+                let view = doc["accessors"]
+                    [doc["meshes"][0]["primitives"][0]["indices"].as_u64().unwrap() as usize]["bufferView"]
+                    .clone();
+                doc["bufferViews"][view.as_u64().unwrap() as usize]["byteOffset"] = json!(0);
+            },
+            &["index", "out of range"],
+        ),
+    ];
+    for (name, edit, expected) in cases {
+        let path = furnace_edited(d, name, edit);
+        let mut parts = vec![name];
+        parts.extend_from_slice(expected);
+        assert_refused(&path, &parts);
+    }
+    // A texture that is not an image: the scene's own .bin named as a texture.
+    let texture = furnace_edited(d, "texture.gltf", |doc| {
+        doc["images"] = json!([{"uri": "furnace.bin"}]);
+        doc["textures"] = json!([{"source": 0}]);
+        doc["materials"][0]["pbrMetallicRoughness"]["baseColorTexture"] = json!({"index": 0});
+    });
+    assert_refused(&texture, &["texture.gltf", "neither PNG nor JPEG"]);
+}
+
+/// A disk that fills up while a frame is written: the render fails with the reason, the frame
+/// rendered before is intact and no temporary file is left (writes capped with `ulimit -f`).
+#[test]
+fn a_full_disk_keeps_the_previous_frame() {
+    let dir = tempfile::tempdir().unwrap();
+    let scene = Path::new(env!("CARGO_MANIFEST_DIR")).join("scenes").join("furnace.gltf");
+    let first = run_within_a_minute(render_command(&scene, dir.path()));
+    assert!(first.status.success(), "{}", String::from_utf8_lossy(&first.stderr));
+    let frame = dir.path().join("frame_0001.exr");
+    let before = std::fs::read(&frame).unwrap();
+    let mut capped = Command::new("bash");
+    capped.arg("-c").arg("trap '' XFSZ; ulimit -f 1; exec \"$0\" \"$@\"");
+    capped.arg(env!("CARGO_BIN_EXE_caustic"));
+    capped.args(["render", scene.to_str().unwrap(), "-o", dir.path().to_str().unwrap()]);
+    capped.args(["--passes", "2", "--resolution", "64x64", "--progress", "none"]);
+    let output = run_within_a_minute(capped);
+    let text = String::from_utf8_lossy(&output.stderr);
+    assert!(!output.status.success(), "the capped render succeeded: {text}");
+    assert!(text.contains("cannot write") && text.contains("frame_0001.exr"), "{text}");
+    assert_eq!(std::fs::read(&frame).unwrap(), before, "the previous frame changed");
+    let names: Vec<_> = std::fs::read_dir(dir.path()).unwrap().map(|e| e.unwrap().file_name()).collect();
+    assert_eq!(names, ["frame_0001.exr"], "files left behind");
+}
+
+/// Ctrl-C (SIGINT) or SIGTERM during a frame range: the render ends after its current pass with a
+/// message, every frame written before is intact, nothing half-written is left, and the same
+/// command with `--resume` renders the rest.
+#[test]
+fn an_interrupted_render_keeps_its_frames_and_resumes() {
+    use std::io::BufRead;
+    for signal in ["INT", "TERM"] {
+        let dir = tempfile::tempdir().unwrap();
+        let scene = Path::new(env!("CARGO_MANIFEST_DIR")).join("scenes").join("shot.gltf");
+        let args = |extra: &[&str]| {
+            let mut c = Command::new(env!("CARGO_BIN_EXE_caustic"));
+            c.args([
+                "render",
+                scene.to_str().unwrap(),
+                "-o",
+                dir.path().to_str().unwrap(),
+                "--frames",
+                "1-4",
+            ]);
+            c.args([
+                "--no-reuse",
+                "--passes",
+                "300",
+                "--resolution",
+                "48x36",
+                "--photons",
+                "3000",
+                "--progress",
+                "json",
+            ]);
+            c.args(extra);
+            c
+        };
+        let mut child = args(&[]).stdout(Stdio::piped()).stderr(Stdio::piped()).spawn().unwrap();
+        let mut lines = std::io::BufReader::new(child.stdout.take().unwrap()).lines();
+        let first_written =
+            lines.by_ref().map(|l| l.unwrap()).find(|l| l.contains("\"written\"")).expect("a frame");
+        // Keep reading, as the add-on does, so the renderer's progress lines have somewhere to go.
+        let drain = std::thread::spawn(move || lines.count());
+        let sent = Instant::now();
+        let killed =
+            Command::new("kill").args([&format!("-{signal}"), &child.id().to_string()]).status().unwrap();
+        assert!(killed.success());
+        let output = child.wait_with_output().unwrap();
+        let waited = sent.elapsed();
+        drain.join().unwrap();
+        let text = String::from_utf8_lossy(&output.stderr);
+        assert!(!output.status.success(), "SIG{signal}: the render did not fail: {text}");
+        assert!(text.contains("interrupted") && text.contains("--resume"), "SIG{signal}: {text}");
+        assert!(waited < Duration::from_secs(20), "SIG{signal}: took {waited:?} to stop");
+        assert!(first_written.contains("frame_0001.exr"), "{first_written}");
+        let names = |d: &Path| {
+            let mut n: Vec<String> = std::fs::read_dir(d)
+                .unwrap()
+                .map(|e| e.unwrap().file_name().into_string().unwrap())
+                .collect();
+            n.sort();
+            n
+        };
+        let kept = names(dir.path());
+        assert!(kept.iter().all(|n| n.starts_with("frame_") && n.ends_with(".exr")), "SIG{signal}: {kept:?}");
+        for name in &kept {
+            let image = read_exr(&dir.path().join(name));
+            assert!(image.mean_all().iter().all(|c| c.is_finite() && *c > 0.0), "{name} is damaged");
+        }
+        let resumed = run_within_a_minute(args(&["--resume"]));
+        assert!(resumed.status.success(), "{}", String::from_utf8_lossy(&resumed.stderr));
+        assert_eq!(
+            names(dir.path()),
+            ["frame_0001.exr", "frame_0002.exr", "frame_0003.exr", "frame_0004.exr"]
+        );
+    }
+}
