@@ -23,9 +23,10 @@ struct Outcome {
 }
 
 fn near(measured: f64, expected: f64, tolerance: f64) -> Outcome {
+    let show = |v: f64| if (1e-3..1e4).contains(&v.abs()) { format!("{v:.4}") } else { format!("{v:.4e}") };
     Outcome {
-        expected: format!("{expected:.4} ± {:.0}%", tolerance * 100.0),
-        measured: format!("{measured:.4}"),
+        expected: format!("{} ± {:.0}%", show(expected), tolerance * 100.0),
+        measured: show(measured),
         pass: (measured / expected - 1.0).abs() <= tolerance,
     }
 }
