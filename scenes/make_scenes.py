@@ -115,6 +115,19 @@ def export(name, animated=False):
     bpy.ops.export_scene.gltf(**options)
 
 
+def glass_material():
+    return material("Glass", (1.0, 1.0, 1.0), roughness=0.0, transmission=1.0, ior=1.5)
+
+
+def cornell_box_with_glass():
+    """The demo box's walls (white, red and green) and the glass material; gives the glass."""
+    white = material("White", (0.75, 0.75, 0.75))
+    red = material("Red", (0.63, 0.065, 0.05))
+    green = material("Green", (0.14, 0.45, 0.091))
+    cornell_box(white, red, green)
+    return glass_material()
+
+
 def cornell_box(white, red, green):
     plane("Floor", 2, (0, 0, 0), (0, 0, 0), white)
     plane("Ceiling", 2, (0, 0, 2), (math.pi, 0, 0), white)
@@ -125,11 +138,7 @@ def cornell_box(white, red, green):
 
 def make_cornell_glass():
     reset()
-    white = material("White", (0.75, 0.75, 0.75))
-    red = material("Red", (0.63, 0.065, 0.05))
-    green = material("Green", (0.14, 0.45, 0.091))
-    glass = material("Glass", (1.0, 1.0, 1.0), roughness=0.0, transmission=1.0, ior=1.5)
-    cornell_box(white, red, green)
+    glass = cornell_box_with_glass()
     # A sphere of radius R and index 1.5 focuses at about 1.5 R beyond its centre: floating it
     # 0.2 above the floor puts the light's image near the floor, a sharp caustic.
     glass_sphere((0.3, -0.3, 0.55), 0.35, glass)
@@ -154,7 +163,7 @@ def make_furnace():
 def make_spot_glass():
     reset()
     floor = material("Floor", (0.7, 0.7, 0.7))
-    glass = material("Glass", (1.0, 1.0, 1.0), roughness=0.0, transmission=1.0, ior=1.5)
+    glass = glass_material()
     plane("Floor", 6, (0, 0, 0), (0, 0, 0), floor)
     glass_sphere((0, 0, 1.0), 0.5, glass)
     bpy.ops.object.light_add(type="SPOT", location=(0, 0, 3.0))
@@ -174,11 +183,7 @@ def make_cornell_animated():
     scene = bpy.context.scene
     scene.frame_start, scene.frame_end = 1, 24
     scene.render.fps = 24
-    white = material("White", (0.75, 0.75, 0.75))
-    red = material("Red", (0.63, 0.065, 0.05))
-    green = material("Green", (0.14, 0.45, 0.091))
-    glass = material("Glass", (1.0, 1.0, 1.0), roughness=0.0, transmission=1.0, ior=1.5)
-    cornell_box(white, red, green)
+    glass = cornell_box_with_glass()
     sphere = glass_sphere((-0.5, -0.2, 0.55), 0.35, glass)
     for frame, x in [(1, -0.5), (24, 0.5)]:
         sphere.location.x = x
@@ -208,12 +213,8 @@ def make_shot(moving_camera):
     scene = bpy.context.scene
     scene.frame_start, scene.frame_end = 1, 24
     scene.render.fps = 24
-    white = material("White", (0.75, 0.75, 0.75))
-    red = material("Red", (0.63, 0.065, 0.05))
-    green = material("Green", (0.14, 0.45, 0.091))
+    glass = cornell_box_with_glass()
     yellow = material("Yellow", (0.8, 0.6, 0.1))
-    glass = material("Glass", (1.0, 1.0, 1.0), roughness=0.0, transmission=1.0, ior=1.5)
-    cornell_box(white, red, green)
     glass_sphere((0.3, -0.3, 0.55), 0.35, glass)
     bpy.ops.mesh.primitive_cube_add(size=0.2, location=(-0.7, 0.3, 0.1))
     cube = bpy.context.object

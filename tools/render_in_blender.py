@@ -28,11 +28,7 @@ import make_scenes  # noqa: E402  (the bundled scenes' own building blocks)
 def demo_box():
     """scenes/cornell_glass as make_scenes.py builds it, without exporting it."""
     make_scenes.reset()
-    white = make_scenes.material("White", (0.75, 0.75, 0.75))
-    red = make_scenes.material("Red", (0.63, 0.065, 0.05))
-    green = make_scenes.material("Green", (0.14, 0.45, 0.091))
-    glass = make_scenes.material("Glass", (1.0, 1.0, 1.0), roughness=0.0, transmission=1.0, ior=1.5)
-    make_scenes.cornell_box(white, red, green)
+    glass = make_scenes.cornell_box_with_glass()
     make_scenes.glass_sphere((0.3, -0.3, 0.55), 0.35, glass)
     make_scenes.area_light("CeilingLight", (-0.3, 0.4, 1.98), 0.2, 25.0)
     make_scenes.camera((0, -3.9, 1.0), (0, 0, 1.0))

@@ -484,3 +484,39 @@ pub fn exr_channels(path: &Path) -> Vec<(String, Vec<f32>)> {
         .map(|c| (c.name.to_string(), c.sample_data.values_as_f32().collect()))
         .collect()
 }
+
+/// Serialises the making of Python environments between the tests of one file.
+static PYTHON_ENVS: std::sync::Mutex<()> = std::sync::Mutex::new(());
+
+/// A Python virtual environment `target/NAME` holding `packages`, made with `python` (such as
+/// `python3.11`) and pip the first time; gives its interpreter.
+pub fn python_env(name: &str, python: &str, packages: &[&str]) -> PathBuf {
+    let _guard = PYTHON_ENVS.lock().unwrap_or_else(|e| e.into_inner());
+    let target = Path::new(env!("CARGO_BIN_EXE_caustic")).ancestors().nth(2).expect("target folder");
+    let venv = target.join(name);
+    let interpreter = venv.join("bin").join("python");
+    let ready = venv.join(format!("ready-{}", packages.join("-")));
+    if !ready.exists() {
+        eprintln!("installing {} into {} (once)", packages.join(", "), venv.display());
+        let made = Command::new(python).args(["-m", "venv"]).arg(&venv).status();
+        assert!(made.is_ok_and(|s| s.success()), "cannot create {}", venv.display());
+        let installed =
+            Command::new(&interpreter).args(["-m", "pip", "install", "--quiet"]).args(packages).status();
+        assert!(installed.is_ok_and(|s| s.success()), "cannot install {}", packages.join(", "));
+        std::fs::write(&ready, "").expect("mark the environment ready");
+    }
+    interpreter
+}
+
+/// Whether `program --version` runs.
+pub fn available(program: &str) -> bool {
+    Command::new(program).arg("--version").output().is_ok_and(|o| o.status.success())
+}
+
+/// Prints what a helper program said, and fails the test with it when the program failed.
+pub fn assert_succeeded(output: Output, what: &str) {
+    let text =
+        format!("{}{}", String::from_utf8_lossy(&output.stdout), String::from_utf8_lossy(&output.stderr));
+    eprintln!("{text}");
+    assert!(output.status.success(), "{what} failed:\n{text}");
+}
