@@ -6,6 +6,7 @@ use std::path::Path;
 use std::time::Instant;
 
 use crate::frames::{self, load_description, RenderReport, RenderSettings, Shot};
+use crate::film::{Film, FilmMode};
 use crate::memory;
 use crate::sppm::{PassStats, Renderer};
 
@@ -81,8 +82,22 @@ pub fn run(scene_path: &Path, resolution: [u32; 2], passes: u64) -> Result<(), S
     let renderer = Renderer::new(&scene, &accel, shot.sppm().clone());
     for threads in [1, 2] {
         let pool = rayon::ThreadPoolBuilder::new().num_threads(threads).build().map_err(|e| e.to_string())?;
+        let s = renderer.settings();
+        let mut film = Film::new(s.width, s.height, FilmMode::Spectral, 0);
+        let mut accumulation_s = 0.0;
         let start = Instant::now();
-        let stats = pool.install(|| (0..passes).map(|i| renderer.run_pass(i).2).sum::<PassStats>());
+        let stats = pool.install(|| {
+            let mut stats = PassStats::default();
+            for i in 0..passes {
+                let (samples, estimates, pass_stats) = renderer.run_pass(i);
+                let added = Instant::now();
+                let sums = estimates.iter().map(|e| (e.radiance, e.laplacian));
+                film.add_pass(samples.lambda_nm, samples.lambda_pdf, samples.radius, sums);
+                accumulation_s += added.elapsed().as_secs_f64();
+                stats = stats + pass_stats;
+            }
+            stats
+        });
         let seconds = start.elapsed().as_secs_f64();
         let rays = stats.eye_rays + stats.shadow_rays + stats.photon_rays;
         let photon_paths = passes * renderer.settings().photons_per_pass as u64;
@@ -94,6 +109,11 @@ pub fn run(scene_path: &Path, resolution: [u32; 2], passes: u64) -> Result<(), S
             stats.eye_rays as f64 / seconds / 1e6,
             stats.shadow_rays as f64 / seconds / 1e6,
             stats.photon_rays as f64 / seconds / 1e6,
+        );
+        let [eye, photon, grid, gather] = stats.stage_ns.map(|ns| ns as f64 * 1e-9 / seconds * 100.0);
+        println!(
+            "  time split: eye paths {eye:.0}%, photon paths {photon:.0}%, grid build {grid:.0}%, gather {gather:.0}%, accumulation {:.0}%",
+            accumulation_s / seconds * 100.0
         );
     }
     println!("peak heap memory: {}", peak_memory());

@@ -97,8 +97,7 @@ pub fn estimate(eye: &EyeResult, [sum, laplacian]: [f32; 2]) -> PixelEstimate {
 }
 
 /// Every pixel's estimate from its eye result and the pass's photons.
-pub fn gather(eye: &[EyeResult], photons: &[Photon], radius: f32) -> Vec<PixelEstimate> {
-    let set = PhotonSet::new(photons, radius);
+pub fn gather(eye: &[EyeResult], set: &PhotonSet) -> Vec<PixelEstimate> {
     eye.par_iter()
         .with_min_len(64)
         .map(|e| estimate(e, e.point.map_or([0.0; 2], |vp| set.sum_at(&vp))))

@@ -3,7 +3,9 @@
 
 use rayon::prelude::*;
 
-use super::gather::gather;
+use std::time::Instant;
+
+use super::gather::{gather, PhotonSet};
 use super::photons::{photon_chunks, trace_photon, Photon};
 use super::renderer::{PassSamples, PassStats, PixelEstimate, Renderer};
 use super::visible::{trace_eye_path, EyeResult};
@@ -12,10 +14,21 @@ impl Renderer<'_> {
     /// Renders pass `index`: one estimate per pixel, in row-major order.
     pub fn run_pass(&self, index: u64) -> (PassSamples, Vec<PixelEstimate>, PassStats) {
         let pass = self.pass_samples(index);
+        let mut clock = Instant::now();
+        let mut lap = || {
+            let ns = clock.elapsed().as_nanos() as u64;
+            clock = Instant::now();
+            ns
+        };
         let (points, eye_stats) = self.trace_visible_points(&pass);
+        let eye_ns = lap();
         let (photons, photon_stats) = self.trace_photons(&pass);
-        let estimates = gather(&points, &photons, pass.radius);
-        (pass, estimates, eye_stats + photon_stats)
+        let photon_ns = lap();
+        let set = PhotonSet::new(&photons, pass.radius);
+        let grid_ns = lap();
+        let estimates = gather(&points, &set);
+        let stages = PassStats { stage_ns: [eye_ns, photon_ns, grid_ns, lap()], ..PassStats::default() };
+        (pass, estimates, eye_stats + photon_stats + stages)
     }
 
     fn trace_visible_points(&self, pass: &PassSamples) -> (Vec<EyeResult>, PassStats) {

@@ -101,6 +101,9 @@ pub struct PassStats {
     pub lens_samples: u64,
     /// Segments of shared paths tested against a frame's moving triangles (reuse across frames).
     pub moving_tests: u64,
+    /// Wall-clock nanoseconds of a single-frame pass's stages: eye paths, photon paths, the
+    /// photon grid's build, and the gather (zero for passes shared by frames).
+    pub stage_ns: [u64; 4],
 }
 
 impl std::iter::Sum for PassStats {
@@ -119,6 +122,7 @@ impl std::ops::Add for PassStats {
             photons_stored: self.photons_stored + o.photons_stored,
             lens_samples: self.lens_samples + o.lens_samples,
             moving_tests: self.moving_tests + o.moving_tests,
+            stage_ns: std::array::from_fn(|i| self.stage_ns[i] + o.stage_ns[i]),
         }
     }
 }
