@@ -5,8 +5,8 @@
 use std::path::Path;
 use std::time::Instant;
 
-use crate::frames::{self, load_description, RenderReport, RenderSettings, Shot};
 use crate::film::{Film, FilmMode};
+use crate::frames::{self, load_description, RenderReport, RenderSettings, Shot};
 use crate::memory;
 use crate::sppm::{PassStats, Renderer};
 
