@@ -7,6 +7,7 @@ Run from the repository root (needs `pip install bpy==5.0.1`, CPython 3.11, x86_
 Writes scenes/<name>.gltf and scenes/<name>.bin:
 - cornell_glass: a Cornell box with a glass sphere lit by a small area light (the demo scene:
   the sphere focuses a caustic onto the floor);
+- cornell_diffuse: the demo box without glass (two white blocks), all light interreflection;
 - furnace: a closed cube whose walls are diffuse (albedo 0.5) and emit radiance 1, seen from
   inside (the analytic answer is Le / (1 - a) = 2 everywhere);
 - spot_glass: a spot light shining through a glass sphere onto a diffuse floor;
@@ -136,7 +137,8 @@ def cornell_box(white, red, green):
     plane("RightWall", 2, (1, 0, 1), (0, -math.pi / 2, 0), green)
 
 
-def make_cornell_glass():
+def cornell_glass_scene():
+    """The demo scene, built but not exported."""
     reset()
     glass = cornell_box_with_glass()
     # A sphere of radius R and index 1.5 focuses at about 1.5 R beyond its centre: floating it
@@ -145,7 +147,39 @@ def make_cornell_glass():
     area_light("CeilingLight", (-0.3, 0.4, 1.98), 0.2, 25.0)
     camera((0, -3.9, 1.0), (0, 0, 1.0))
     set_resolution(480, 360)
+
+
+def make_cornell_glass():
+    cornell_glass_scene()
     export("cornell_glass")
+
+
+def block(name, size, location, angle, mat):
+    """A diffuse box standing on the floor, turned by `angle` about the vertical."""
+    bpy.ops.mesh.primitive_cube_add(size=1, location=location, rotation=(0, 0, angle))
+    obj = bpy.context.object
+    obj.name = name
+    obj.scale = size
+    obj.data.materials.append(mat)
+    return obj
+
+
+def cornell_diffuse_scene():
+    """The demo box without glass: a tall and a short white block, the same small light; every
+    surface diffuse, so all light is interreflection (the benchmark's diffuse-only scene)."""
+    reset()
+    white = material("White", (0.75, 0.75, 0.75))
+    cornell_box(white, material("Red", (0.63, 0.065, 0.05)), material("Green", (0.14, 0.45, 0.091)))
+    block("TallBlock", (0.55, 0.55, 1.2), (-0.35, 0.3, 0.6), 0.3, white)
+    block("ShortBlock", (0.55, 0.55, 0.55), (0.35, -0.35, 0.275), -0.3, white)
+    area_light("CeilingLight", (0.0, 0.0, 1.98), 0.4, 40.0)
+    camera((0, -3.9, 1.0), (0, 0, 1.0))
+    set_resolution(480, 360)
+
+
+def make_cornell_diffuse():
+    cornell_diffuse_scene()
+    export("cornell_diffuse")
 
 
 def make_furnace():
@@ -160,7 +194,8 @@ def make_furnace():
     export("furnace")
 
 
-def make_spot_glass():
+def spot_glass_scene():
+    """A spot light through a glass sphere onto a floor, built but not exported."""
     reset()
     floor = material("Floor", (0.7, 0.7, 0.7))
     glass = glass_material()
@@ -171,8 +206,13 @@ def make_spot_glass():
     spot.data.energy = 500.0
     spot.data.spot_size = math.radians(40)
     spot.data.spot_blend = 0.1
+    spot.data.shadow_soft_size = 0.0  # a point spot, as glTF's KHR_lights_punctual has it
     camera((0, -4.0, 3.0), (0, 0, 0.3))
     set_resolution(320, 240)
+
+
+def make_spot_glass():
+    spot_glass_scene()
     export("spot_glass")
 
 
@@ -242,5 +282,6 @@ if __name__ == "__main__":
     make_shot(moving_camera=True)
     make_cornell_animated()
     make_cornell_glass()
+    make_cornell_diffuse()
     make_furnace()
     make_spot_glass()

@@ -3,7 +3,7 @@
 //! and one for the moving part (built per pose, small).
 //!
 //! Takes triangle corners; gives closest hits (triangle index, distance, barycentrics) and
-//! occlusion tests. Triangle indices number the fixed part first, then the moving part, as
+//! occlusion tests, which pass through triangles that cast no shadow (area lights). Triangle indices number the fixed part first, then the moving part, as
 //! `Scene` does.
 
 use std::sync::Arc;
@@ -43,6 +43,8 @@ pub struct Bvh {
     triangles: Vec<Triangle>,
     /// Working coordinates over world coordinates (a power of two).
     scale: f32,
+    /// Per triangle, whether it blocks shadow rays.
+    casts_shadow: Vec<bool>,
 }
 
 /// The power of two that brings the largest finite coordinate of `corners` near 2^20.
@@ -63,33 +65,44 @@ pub struct Accel {
 }
 
 impl Accel {
-    /// A BVH over `corners`, all fixed.
+    /// A BVH over `corners`, all fixed and all casting shadows.
     pub fn build(corners: &[[Vec3; 3]]) -> Self {
-        Accel::new(Arc::new(Bvh::build(corners)), &[])
+        Accel::new(Arc::new(Bvh::build(corners, &vec![true; corners.len()])), Bvh::build(&[], &[]))
     }
 
-    /// The fixed part's BVH with one built over `moving` (numbered after the fixed triangles).
-    pub fn new(fixed: Arc<Bvh>, moving: &[[Vec3; 3]]) -> Self {
+    /// The fixed part's BVH with the moving part's (numbered after the fixed triangles).
+    pub fn new(fixed: Arc<Bvh>, moving: Bvh) -> Self {
         let fixed_count = fixed.triangles.len() as u32;
-        Accel { fixed, moving: Bvh::build(moving), fixed_count }
+        Accel { fixed, moving, fixed_count }
     }
 
     /// The closest hit along the ray from `origin` in the unit `direction` before `t_max`.
     pub fn intersect(&self, origin: Vec3, direction: Vec3, t_max: f32) -> Option<Hit> {
-        let fixed = self.fixed.intersect(origin, direction, t_max);
-        let moving = self.moving.intersect(origin, direction, fixed.map_or(t_max, |h| h.t));
+        self.closest(origin, direction, t_max, false)
+    }
+
+    /// The closest hit on a triangle that casts shadows (what photons meet: they pass through
+    /// area lights as if they were not there).
+    pub fn intersect_opaque(&self, origin: Vec3, direction: Vec3, t_max: f32) -> Option<Hit> {
+        self.closest(origin, direction, t_max, true)
+    }
+
+    fn closest(&self, origin: Vec3, direction: Vec3, t_max: f32, opaque_only: bool) -> Option<Hit> {
+        let fixed = self.fixed.intersect(origin, direction, t_max, opaque_only);
+        let moving = self.moving.intersect(origin, direction, fixed.map_or(t_max, |h| h.t), opaque_only);
         match moving {
             Some(hit) => Some(Hit { triangle: hit.triangle + self.fixed_count, ..hit }),
             None => fixed,
         }
     }
 
-    /// Whether anything lies on the ray from `origin` in the unit `direction` before `t_max`.
+    /// Whether anything that casts shadows lies on the ray from `origin` in the unit `direction`
+    /// before `t_max`.
     pub fn occluded(&self, origin: Vec3, direction: Vec3, t_max: f32) -> bool {
         self.fixed.occluded(origin, direction, t_max) || self.moving_occluded(origin, direction, t_max)
     }
 
-    /// Whether a moving triangle lies on the ray before `t_max` (the fixed part is not tested).
+    /// Whether a moving triangle that casts shadows lies on the ray before `t_max` (the fixed part is not tested).
     pub fn moving_occluded(&self, origin: Vec3, direction: Vec3, t_max: f32) -> bool {
         self.moving.occluded(origin, direction, t_max)
     }
@@ -104,8 +117,9 @@ impl Accel {
 }
 
 impl Bvh {
-    /// Builds the BVH over `corners` (one entry per triangle).
-    pub fn build(corners: &[[Vec3; 3]]) -> Self {
+    /// Builds the BVH over `corners` (one entry per triangle), with whether each casts shadows.
+    pub fn build(corners: &[[Vec3; 3]], casts_shadow: &[bool]) -> Self {
+        debug_assert_eq!(corners.len(), casts_shadow.len());
         let scale = working_scale(corners);
         // A triangle a transform has sent to infinity cannot be hit; it becomes a point (never hit)
         // so that the BVH's bounds stay finite and triangle numbers stay in step with the scene.
@@ -118,7 +132,7 @@ impl Bvh {
         let bvh = (!triangles.is_empty()).then(|| {
             build_cwbvh_from_tris(&triangles, BvhBuildParams::medium_build(), &mut Duration::default())
         });
-        Bvh { bvh, triangles, scale }
+        Bvh { bvh, triangles, scale, casts_shadow: casts_shadow.to_vec() }
     }
 
     /// The obvhs ray, in working coordinates, for a world-space ray.
@@ -130,14 +144,14 @@ impl Bvh {
         Ray::new((origin * self.scale).into(), (direction + Vec3::ZERO).into(), 0.0, t_max * self.scale)
     }
 
-    /// The closest hit along the ray from `origin` in the unit `direction` before `t_max`.
-    pub fn intersect(&self, origin: Vec3, direction: Vec3, t_max: f32) -> Option<Hit> {
+    /// The closest hit along the ray from `origin` in the unit `direction` before `t_max`, among
+    /// the triangles that cast shadows if `opaque_only`.
+    pub fn intersect(&self, origin: Vec3, direction: Vec3, t_max: f32, opaque_only: bool) -> Option<Hit> {
         let bvh = self.bvh.as_ref()?;
         let ray = self.ray(origin, direction, t_max);
         let mut hit = RayHit::none();
-        let found = bvh.ray_traverse(ray, &mut hit, |ray, slot| {
-            self.triangles[bvh.primitive_indices[slot] as usize].intersect(ray)
-        });
+        let found =
+            bvh.ray_traverse(ray, &mut hit, |ray, slot| self.hit_distance(bvh, ray, slot, opaque_only));
         if !found {
             return None;
         }
@@ -147,15 +161,24 @@ impl Bvh {
         Some(Hit { triangle, t: hit.t / self.scale, barycentric })
     }
 
-    /// Whether anything lies on the ray from `origin` in the unit `direction` before `t_max`.
+    /// Whether anything that casts shadows lies on the ray from `origin` in the unit `direction`
+    /// before `t_max`.
     pub fn occluded(&self, origin: Vec3, direction: Vec3, t_max: f32) -> bool {
         let Some(bvh) = self.bvh.as_ref() else {
             return false;
         };
         let ray = self.ray(origin, direction, t_max);
-        !bvh.ray_traverse_miss(ray, |ray, slot| {
-            self.triangles[bvh.primitive_indices[slot] as usize].intersect(ray)
-        })
+        !bvh.ray_traverse_miss(ray, |ray, slot| self.hit_distance(bvh, ray, slot, true))
+    }
+
+    /// The distance to the triangle in `slot` along `ray`; infinite for triangles that cast no
+    /// shadow when `opaque_only`.
+    fn hit_distance(&self, bvh: &CwBvh, ray: &Ray, slot: usize, opaque_only: bool) -> f32 {
+        let triangle = bvh.primitive_indices[slot] as usize;
+        if opaque_only && !self.casts_shadow[triangle] {
+            return f32::INFINITY;
+        }
+        self.triangles[triangle].intersect(ray)
     }
 }
 

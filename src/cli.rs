@@ -29,6 +29,9 @@ enum Command {
     Info(InfoArgs),
     /// Draw error against time from --log files as an SVG chart (estimated, and true when known).
     Plot(PlotArgs),
+    /// Print, as JSON, an EXR's luminance error against a reference EXR (RMSE, relative MSE, mean
+    /// relative error): for regression tests and comparisons with other renderers.
+    Compare(CompareArgs),
     /// Add up partial results (`render --pass-range A..B --partial`) into OUT/frame_####.exr.
     Merge(MergeArgs),
 }
@@ -46,6 +49,16 @@ pub struct MergeArgs {
     /// Confidence of the per-pixel error bound (Error.Y), in (0, 1).
     #[arg(long, value_name = "C", default_value_t = 0.9, allow_negative_numbers = true, value_parser = unit_interval)]
     confidence: f64,
+}
+
+/// Flags of `caustic compare`.
+#[derive(Args, Debug)]
+pub struct CompareArgs {
+    /// The image to measure (an EXR with `Combined.R/G/B` or `R/G/B`).
+    image: PathBuf,
+    /// The converged reference, the same size.
+    #[arg(long, value_name = "EXR")]
+    reference: PathBuf,
 }
 
 /// Flags of `caustic plot`.
@@ -348,6 +361,11 @@ pub fn run(cli: Cli) -> Result<(), String> {
             Ok(())
         }
         Command::Plot(args) => crate::plot::plot(&args.logs, &args.out),
+        Command::Compare(args) => {
+            let error = crate::monitor::compare(&args.image, &args.reference)?;
+            println!("{}", serde_json::to_string(&error).expect("JSON"));
+            Ok(())
+        }
         Command::Merge(args) => {
             for (path, frame) in frames::merge(&args.partials, &args.out, args.confidence)? {
                 eprintln!("caustic: wrote {} ({} passes)", path.display(), frame.passes);

@@ -153,17 +153,29 @@ pub struct TrueError {
 
 /// The true error of `errors` against `reference` (luminance per pixel, same size).
 pub fn true_error(errors: &[PixelError], reference: &[f64]) -> TrueError {
-    let n = errors.len().max(1) as f64;
+    let values: Vec<f64> = errors.iter().map(|e| e.value).collect();
+    let mut error = image_error(&values, reference);
     let floor = relative_floor(reference.iter().copied());
-    let (mut squared, mut relative, mut covered, mut relative_sum, mut above) = (0.0, 0.0, 0.0, 0.0, 0.0);
-    for (e, &r) in errors.iter().zip(reference) {
-        let difference = e.value - r;
+    let (mut covered, mut above) = (0.0, 0.0);
+    for (e, &r) in errors.iter().zip(reference).filter(|(_, &r)| r > floor) {
+        covered += f64::from(u8::from((e.value - r).abs() <= e.bound));
+        above += 1.0;
+    }
+    error.coverage = if above > 0.0 { covered / above } else { 1.0 };
+    error
+}
+
+/// The error of an image's luminance `values` against `reference` (same size), without bounds
+/// (coverage 1): what `caustic compare` prints for images of any renderer.
+pub fn image_error(values: &[f64], reference: &[f64]) -> TrueError {
+    let n = values.len().max(1) as f64;
+    let floor = relative_floor(reference.iter().copied());
+    let (mut squared, mut relative, mut relative_sum, mut above) = (0.0, 0.0, 0.0, 0.0);
+    for (&v, &r) in values.iter().zip(reference) {
+        let difference = v - r;
         squared += difference * difference;
         relative += difference * difference / (r * r + floor * floor);
         if r > floor {
-            if difference.abs() <= e.bound {
-                covered += 1.0;
-            }
             relative_sum += difference.abs() / r;
             above += 1.0;
         }
@@ -171,7 +183,7 @@ pub fn true_error(errors: &[PixelError], reference: &[f64]) -> TrueError {
     TrueError {
         rmse: (squared / n).sqrt(),
         relative_mse: relative / n,
-        coverage: if above > 0.0 { covered / above } else { 1.0 },
+        coverage: 1.0,
         mean_relative: if above > 0.0 { relative_sum / above } else { 0.0 },
     }
 }

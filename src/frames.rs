@@ -295,7 +295,7 @@ impl Shot {
         }
         let lens = lens(lens_settings, description.camera.focal_length_mm);
         let prepared = Prepared::with_lens(Arc::new(description), range, lens);
-        let fixed_bvh = Arc::new(Bvh::build(&prepared.fixed_corners()));
+        let fixed_bvh = Arc::new(prepared.fixed_bvh());
         let first = prepared.pose(range.start);
         let sppm = SppmSettings {
             width,
@@ -306,7 +306,8 @@ impl Shot {
             seed: settings.seed,
             fixed_wavelength_nm: settings.wavelength_nm,
         };
-        let still = (!prepared.has_motion()).then(|| (first, Accel::new(Arc::clone(&fixed_bvh), &[])));
+        let still = (!prepared.has_motion())
+            .then(|| (first, Accel::new(Arc::clone(&fixed_bvh), Bvh::build(&[], &[]))));
         let identity = match settings.partial_passes {
             Some(_) => Some((
                 partial::scene_sha256(&settings.scene)?,
@@ -335,13 +336,13 @@ impl Shot {
     /// The scene and its BVHs at `time`.
     pub fn pose(&self, time: f32) -> (Scene, Accel) {
         let scene = self.prepared.pose(time);
-        let accel = Accel::new(Arc::clone(&self.fixed_bvh), &scene.moving.corners());
+        let accel = Accel::new(Arc::clone(&self.fixed_bvh), scene.moving.bvh(&scene.materials));
         (scene, accel)
     }
 
     /// The fixed part's BVH alone (what paths shared between frames are traced against).
     fn fixed_accel(&self) -> Accel {
-        Accel::new(Arc::clone(&self.fixed_bvh), &[])
+        Accel::new(Arc::clone(&self.fixed_bvh), Bvh::build(&[], &[]))
     }
 
     /// The pose `frame` renders pass `pass` in (its `own` when it has one for all its passes);

@@ -9,7 +9,9 @@ use std::path::{Path, PathBuf};
 
 use serde_json::json;
 
-use crate::error::{pixel_errors, summarize, true_error, ErrorSummary, PixelError, Statistic};
+use crate::error::{
+    image_error, pixel_errors, summarize, true_error, ErrorSummary, PixelError, Statistic, TrueError,
+};
 use crate::film::Film;
 
 /// What `caustic render` was asked about errors.
@@ -55,11 +57,11 @@ impl StopReason {
 }
 
 /// Reads the luminance (Rec.709 weights of `Combined.R/G/B`, or `R/G/B`) of an EXR.
-pub fn read_luminance(path: &Path) -> Result<(usize, usize, Vec<f64>), String> {
+pub fn read_luminance(path: &Path, what: &str) -> Result<(usize, usize, Vec<f64>), String> {
     use exr::prelude::read_all_flat_layers_from_file;
     let image = read_all_flat_layers_from_file(path)
-        .map_err(|e| format!("cannot read reference {}: {e}", path.display()))?;
-    let layer = image.layer_data.first().ok_or_else(|| format!("reference {}: no image", path.display()))?;
+        .map_err(|e| format!("cannot read {what} {}: {e}", path.display()))?;
+    let layer = image.layer_data.first().ok_or_else(|| format!("{what} {}: no image", path.display()))?;
     let channel = |name: &str| -> Result<Vec<f32>, String> {
         layer
             .channel_data
@@ -70,13 +72,27 @@ pub fn read_luminance(path: &Path) -> Result<(usize, usize, Vec<f64>), String> {
                 n == format!("Combined.{name}") || n == name
             })
             .map(|c| c.sample_data.values_as_f32().collect())
-            .ok_or_else(|| format!("reference {}: no channel Combined.{name} or {name}", path.display()))
+            .ok_or_else(|| format!("{what} {}: no channel Combined.{name} or {name}", path.display()))
     };
     let (r, g, b) = (channel("R")?, channel("G")?, channel("B")?);
     let y = (0..r.len())
         .map(|i| 0.2126 * f64::from(r[i]) + 0.7152 * f64::from(g[i]) + 0.0722 * f64::from(b[i]))
         .collect();
     Ok((layer.size.0, layer.size.1, y))
+}
+
+/// The luminance error of the EXR `image` against the EXR `reference`; refuses different sizes.
+pub fn compare(image: &Path, reference: &Path) -> Result<TrueError, String> {
+    let (w, h, values) = read_luminance(image, "image")?;
+    let (rw, rh, truth) = read_luminance(reference, "reference")?;
+    if (w, h) != (rw, rh) {
+        return Err(format!(
+            "{} is {w}x{h}, the reference {} is {rw}x{rh}",
+            image.display(),
+            reference.display()
+        ));
+    }
+    Ok(image_error(&values, &truth))
 }
 
 /// Watches one frame.
@@ -94,7 +110,7 @@ impl Monitor {
         let reference = match &settings.reference {
             Some(pattern) => {
                 let path = PathBuf::from(pattern.to_string_lossy().replace("####", &format!("{frame:04}")));
-                let (w, h, y) = read_luminance(&path)?;
+                let (w, h, y) = read_luminance(&path, "reference")?;
                 if (w, h) != (width as usize, height as usize) {
                     return Err(format!(
                         "reference {} is {w}x{h}, the render is {width}x{height}",

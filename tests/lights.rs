@@ -65,6 +65,20 @@ fn area_light_power_is_watts() {
     assert_near(mean_luminance(&gltf.write(dir.path(), "area"), dir.path()), 1.0, "area light");
 }
 
+/// Area lights are not surfaces, as in Blender: a wide one hung between the light above and the
+/// ground, facing up, casts no shadow, so the ground still reflects radiance 1.
+#[test]
+fn area_lights_cast_no_shadow() {
+    let dir = tempfile::tempdir().unwrap();
+    let area = json!({"area_light": {"shape": "SQUARE", "size": 0.1, "power": 4.0 * PI * PI}});
+    let screen = json!({"area_light": {"shape": "SQUARE", "size": 3.0, "power": 10.0}});
+    let gltf = ground_scene(|g| {
+        g.extras_node("Area", area, [0.0, 2.0, 0.0], [0.0, -1.0, 0.0]);
+        g.extras_node("Screen", screen, [0.0, 1.5, 0.0], [0.0, 1.0, 0.0]);
+    });
+    assert_near(mean_luminance(&gltf.write(dir.path(), "screened"), dir.path()), 1.0, "ground under a light");
+}
+
 /// An emissive surface seen straight on has radiance emissiveFactor * emissive_strength (no 683).
 #[test]
 fn emissive_strength_scales_the_emitted_radiance() {

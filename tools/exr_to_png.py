@@ -1,4 +1,4 @@
-"""Converts a Caustic EXR (Combined.R/G/B) to an sRGB PNG for viewing.
+"""Converts an EXR (Caustic's Combined.R/G/B, or R/G/B as Blender writes) to an sRGB PNG for viewing.
 
     python tools/exr_to_png.py renders/frame_0001.exr out.png [--exposure STOPS]
 
@@ -19,7 +19,8 @@ def main():
     args = parser.parse_args()
     with OpenEXR.File(args.exr, separate_channels=True) as f:
         channels = f.channels()
-        rgb = np.stack([channels[f"Combined.{c}"].pixels for c in "RGB"], axis=-1).astype(np.float64)
+        prefix = "Combined." if "Combined.R" in channels else ""
+        rgb = np.stack([channels[prefix + c].pixels for c in "RGB"], axis=-1).astype(np.float64)
     rgb *= 2.0 ** args.exposure
     srgb = np.where(rgb <= 0.0031308, 12.92 * rgb, 1.055 * np.power(np.clip(rgb, 0, None), 1 / 2.4) - 0.055)
     Image.fromarray((np.clip(srgb, 0, 1) * 255 + 0.5).astype(np.uint8)).save(args.png)

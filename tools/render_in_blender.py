@@ -27,16 +27,10 @@ import make_scenes  # noqa: E402  (the bundled scenes' own building blocks)
 
 def demo_box():
     """scenes/cornell_glass as make_scenes.py builds it, without exporting it."""
-    make_scenes.reset()
-    glass = make_scenes.cornell_box_with_glass()
-    make_scenes.glass_sphere((0.3, -0.3, 0.55), 0.35, glass)
-    make_scenes.area_light("CeilingLight", (-0.3, 0.4, 1.98), 0.2, 25.0)
-    make_scenes.camera((0, -3.9, 1.0), (0, 0, 1.0))
-    scene = bpy.context.scene
-    scene.render.resolution_x, scene.render.resolution_y = 480, 360
+    make_scenes.cornell_glass_scene()
     for obj in bpy.data.objects:
         obj.pop("caustic", None)  # the add-on writes the extras itself
-    return scene
+    return bpy.context.scene
 
 
 def enable_addon(binary):

@@ -93,6 +93,12 @@ impl Material {
         }
     }
 
+    /// Whether light passes through unchanged (a thin fully transmissive wall of index 1, as area
+    /// lights are): such surfaces cast no shadow.
+    pub fn is_invisible(&self) -> bool {
+        self.thin && self.transmission >= 1.0 && self.ior == Dispersion::Constant(1.0)
+    }
+
     /// The BSDF at texture coordinate `uv` and `lambda_nm`, with `u_lobe` a uniform number that
     /// picks a lobe where the material mixes several.
     pub fn bsdf(&self, uv: Vec2, lambda_nm: f32, u_lobe: f32) -> Bsdf {

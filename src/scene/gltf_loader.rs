@@ -29,7 +29,7 @@ use super::{shapes, SceneError, TriangleRef};
 use crate::geometry::Cone;
 use crate::lights::World;
 use crate::materials::{BaseColour, Material};
-use crate::spectrum::RgbSpectrum;
+use crate::spectrum::{Dispersion, RgbSpectrum};
 
 /// glTF photometric units to watts: Blender writes W * 683 / (4 pi) candela and W/m^2 * 683 lux.
 const LUMENS_PER_WATT: f32 = 683.0;
@@ -327,7 +327,8 @@ impl Builder<'_> {
     }
 
     /// An area light becomes one-sided emitting triangles with radiance P / (pi A), A its area
-    /// at the scene's rest pose.
+    /// at the scene's rest pose, that every ray passes through unchanged (a thin wall of index 1),
+    /// as Blender's lights do: they cast no shadow and hide nothing behind them.
     fn add_area_light(
         &mut self,
         area: &AreaLightExtras,
@@ -353,6 +354,9 @@ impl Builder<'_> {
             base_colour: BaseColour::Constant(RgbSpectrum::constant(0.0)),
             emission: Some(RgbSpectrum::illuminant(radiance)),
             emits_both_sides: false,
+            transmission: 1.0,
+            ior: Dispersion::Constant(1.0),
+            thin: true,
             ..Material::default_grey()
         });
         let positions: Vec<Vec3> = local.iter().flatten().copied().collect();

@@ -20,6 +20,7 @@ use std::sync::Arc;
 
 use glam::{Vec2, Vec3};
 
+use crate::accel::Bvh;
 use crate::camera::Camera;
 use crate::lights::{BoundingSphere, Light};
 use crate::materials::{Material, ShadingFrame};
@@ -60,6 +61,14 @@ pub struct Geometry {
 }
 
 impl Geometry {
+    /// The BVH over these triangles; those of materials light passes through unchanged (area
+    /// lights) cast no shadow.
+    pub fn bvh(&self, materials: &[Material]) -> Bvh {
+        let casts_shadow: Vec<bool> =
+            self.triangles.iter().map(|t| !materials[t.material as usize].is_invisible()).collect();
+        Bvh::build(&self.corners(), &casts_shadow)
+    }
+
     /// The corners of every triangle, in order.
     pub fn corners(&self) -> Vec<[Vec3; 3]> {
         self.triangles.iter().map(|t| t.vertices.map(|v| self.positions[v as usize])).collect()

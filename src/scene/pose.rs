@@ -11,6 +11,7 @@ use glam::{Mat3, Mat4, Vec3};
 
 use super::description::{Description, Lens, LensSettings, MeshInstance, PunctualKind, PunctualLight};
 use super::{bounding_sphere, Geometry, Scene, NOT_A_LIGHT};
+use crate::accel::Bvh;
 use crate::camera::Camera;
 use crate::lights::{BoundingSphere, Light};
 use crate::materials::Material;
@@ -201,9 +202,9 @@ impl Prepared {
         (self.fixed.triangles.len(), moving)
     }
 
-    /// The fixed part's triangle corners (for its BVH, built once).
-    pub fn fixed_corners(&self) -> Vec<[Vec3; 3]> {
-        self.fixed.corners()
+    /// The fixed part's BVH (built once).
+    pub fn fixed_bvh(&self) -> Bvh {
+        self.fixed.bvh(&self.description.materials)
     }
 
     /// The lens on the camera.

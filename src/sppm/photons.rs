@@ -85,7 +85,7 @@ pub fn continue_photon(
     let first_stored = out.len();
     while state.depth < MAX_DEPTH {
         stats.photon_rays += 1;
-        let hit = renderer.accel.intersect(state.origin, state.direction, f32::INFINITY);
+        let hit = renderer.accel.intersect_opaque(state.origin, state.direction, f32::INFINITY);
         watch(&state, hit.map_or(f32::INFINITY, |h| h.t), out.len() - first_stored);
         let Some(hit) = hit else {
             break;

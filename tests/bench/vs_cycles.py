@@ -1,0 +1,283 @@
+"""Caustic against Cycles at equal CPU time, on the same machine, in one run (a benchmark, not a
+test: run it by hand on an idle machine, release build first):
+
+    cargo build --release
+    target/bpy-venv/bin/pip install matplotlib        # once; `cargo test` made the venv
+    target/bpy-venv/bin/python tests/bench/vs_cycles.py [--budgets 10,30,100,300] [--threads 2]
+                                                        [--scenes caustic,diffuse,spot] [-o bench-out]
+
+Each scene is built in Blender (bpy) by scenes/make_scenes.py, exported by the add-on for Caustic
+and rendered by Cycles from the same in-memory .blend: CPU device, the same thread count,
+denoising and adaptive sampling off, a 1-pixel box filter, no glossy filter, and path lengths up
+to Caustic's 32 bounces. Budgets are CPU seconds (threads x rendering wall time; both renderers'
+times exclude loading and BVH building, as Cycles' time limit does). Cycles renders once per
+budget; Caustic renders once for the largest budget with `--log` and `--reference`, whose lines
+(after passes 1, 2, 4, ...) give its error along the way.
+
+The error is the relative MSE of luminance, mean of (Y - Y_ref)^2 / (Y_ref^2 + f^2), f = 1% of
+the reference's mean (`caustic compare`), against tests/bench/<scene>.exr: a long Caustic render
+with another seed, whose provenance is in tests/bench/references.json (`--make-reference PASSES`
+writes both). Prints, per scene, both errors at each budget and the ratio of the time Caustic
+needs to reach Cycles' error to Cycles' time; writes OUT/error_vs_time.svg and the last images.
+The spot scene (a point spot through glass, which Cycles cannot render) is rendered by both at
+each budget; its Caustic images and error bounds show it converging.
+"""
+import argparse
+import datetime
+import json
+import math
+import os
+import pathlib
+import resource
+import subprocess
+import sys
+import tempfile
+import time
+
+ROOT = pathlib.Path(__file__).resolve().parents[2]
+HERE = ROOT / "tests" / "bench"
+sys.path.insert(0, str(ROOT / "tools"))
+
+import render_in_blender  # noqa: E402  (sets a temporary HOME, imports bpy and scenes/make_scenes.py)
+import bpy  # noqa: E402
+
+make_scenes = render_in_blender.make_scenes
+SCENES = {
+    "caustic": make_scenes.cornell_glass_scene,
+    "diffuse": make_scenes.cornell_diffuse_scene,
+    "spot": make_scenes.spot_glass_scene,
+}
+REFERENCE_SEED = 777
+BENCH_SEED = 1
+
+
+def build(name, resolution, binary):
+    """Builds scene `name` in Blender at `resolution`, without the extras the add-on writes itself,
+    and enables the add-on (Blender's factory reset, which starts every scene, disables it)."""
+    SCENES[name]()
+    render_in_blender.enable_addon(binary)
+    for obj in bpy.data.objects:
+        obj.pop("caustic", None)
+        # Caustic shows lights to the camera; Cycles hides area lights unless told.
+        obj.visible_camera = True
+    scene = bpy.context.scene
+    scene.pop("caustic", None)
+    scene.render.resolution_x, scene.render.resolution_y = resolution
+    scene.render.resolution_percentage = 100
+    return scene
+
+
+def export(scene, folder):
+    """The scene as the add-on exports it for a render; gives the glTF's path."""
+    path = folder / "scene.gltf"
+    sys.modules["caustic.export"].export(scene, path)
+    return path
+
+
+def cpu_seconds(who):
+    usage = resource.getrusage(who)
+    return usage.ru_utime + usage.ru_stime
+
+
+def render_cycles(scene, seconds, threads, path):
+    """Cycles for `seconds` of rendering wall time; gives (wall s, CPU s) of the whole call."""
+    scene.render.engine = 'CYCLES'
+    cycles = scene.cycles
+    cycles.device = 'CPU'
+    cycles.samples = 1 << 24
+    cycles.time_limit = seconds
+    cycles.use_adaptive_sampling = False
+    cycles.use_denoising = False
+    cycles.pixel_filter_type = 'BOX'
+    cycles.filter_width = 1.0
+    cycles.blur_glossy = 0.0
+    for bounces in ("max_bounces", "diffuse_bounces", "glossy_bounces", "transmission_bounces",
+                    "transparent_max_bounces"):
+        setattr(cycles, bounces, 32)
+    scene.render.threads_mode = 'FIXED'
+    scene.render.threads = threads
+    scene.render.image_settings.file_format = 'OPEN_EXR'
+    scene.render.image_settings.color_depth = '32'
+    scene.render.filepath = str(path)
+    wall, cpu = time.perf_counter(), cpu_seconds(resource.RUSAGE_SELF)
+    bpy.ops.render.render(write_still=True)
+    return time.perf_counter() - wall, cpu_seconds(resource.RUSAGE_SELF) - cpu
+
+
+def render_caustic(binary, gltf, out, flags):
+    """`caustic render` with `flags`; gives (wall s, CPU s) of the process."""
+    wall, cpu = time.perf_counter(), cpu_seconds(resource.RUSAGE_CHILDREN)
+    subprocess.run([binary, "render", str(gltf), "-o", str(out), "--progress", "none", *flags], check=True)
+    return time.perf_counter() - wall, cpu_seconds(resource.RUSAGE_CHILDREN) - cpu
+
+
+def relative_mse(binary, image, reference):
+    printed = subprocess.run([binary, "compare", str(image), "--reference", str(reference)], check=True,
+                             capture_output=True, text=True).stdout
+    return json.loads(printed)["relative_mse"]
+
+
+def caustic_curve(log, threads):
+    """(CPU s, relative MSE, passes) after each logged pass of a `--log` file with a reference."""
+    lines = [json.loads(line) for line in log.read_text().splitlines() if line.strip()]
+    return [(threads * l["elapsed_s"], l["true"]["relative_mse"], l["passes"]) for l in lines]
+
+
+def error_at(curve, seconds):
+    """The curve's error at `seconds`, interpolated on log-log axes (None outside it)."""
+    for (t0, e0, _), (t1, e1, _) in zip(curve, curve[1:]):
+        if t0 <= seconds <= t1 and t0 > 0:
+            s = math.log(seconds / t0) / math.log(t1 / t0) if t1 > t0 else 0.0
+            return math.exp(math.log(e0) + s * math.log(e1 / e0))
+    return None
+
+
+def time_to_reach(curve, error):
+    """The first time the curve's error falls to `error`, interpolated on log-log axes; None if it
+    never does; the curve's first time if it starts below."""
+    if curve[0][1] <= error:
+        return curve[0][0]
+    for (t0, e0, _), (t1, e1, _) in zip(curve, curve[1:]):
+        if e1 <= error < e0:
+            s = math.log(error / e0) / math.log(e1 / e0)
+            return math.exp(math.log(t0) + s * math.log(t1 / t0))
+    return None
+
+
+def make_reference(binary, name, args):
+    """Renders tests/bench/<name>.exr with Caustic and records how in references.json."""
+    scene = build(name, args.resolution, args.binary)
+    work = pathlib.Path(tempfile.mkdtemp(prefix=f"caustic-ref-{name}-"))
+    gltf = export(scene, work)
+    flags = ["--passes", str(args.make_reference), "--seed", str(REFERENCE_SEED), "--threads", str(args.threads)]
+    wall, cpu = render_caustic(args.binary, gltf, work, flags)
+    (work / "frame_0001.exr").replace(HERE / f"{name}.exr")
+    commit = subprocess.run(["git", "-C", str(ROOT), "rev-parse", "--short", "HEAD"], capture_output=True,
+                            text=True).stdout.strip()
+    provenance_path = HERE / "references.json"
+    provenance = json.loads(provenance_path.read_text()) if provenance_path.exists() else {}
+    provenance[name] = {
+        "renderer": "caustic render (SPPM), this repository", "commit": commit,
+        "scene": f"scenes/make_scenes.py {SCENES[name].__name__}(), exported by the add-on",
+        "resolution": list(args.resolution), "passes": args.make_reference, "seed": REFERENCE_SEED,
+        "photons_per_pass": "one per pixel (default)", "threads": args.threads,
+        "wall_s": round(wall, 1), "cpu_s": round(cpu, 1), "date": datetime.date.today().isoformat(),
+    }
+    provenance_path.write_text(json.dumps(provenance, indent=2) + "\n")
+    print(f"{name}: reference of {args.make_reference} passes in {wall:.0f} s -> {HERE / (name + '.exr')}")
+
+
+def bench_scene(name, args, out):
+    """Both renderers at every budget; gives the scene's results."""
+    scene = build(name, args.resolution, args.binary)
+    folder = out / name
+    folder.mkdir(parents=True, exist_ok=True)
+    gltf = export(scene, folder)
+    reference = HERE / f"{name}.exr"
+    has_reference = reference.exists()
+    log = folder / "caustic.log"
+    log.unlink(missing_ok=True)
+    flags = ["--time-budget", str(max(args.budgets) / args.threads), "--threads", str(args.threads),
+             "--seed", str(BENCH_SEED), "--log", str(log)]
+    if has_reference:
+        flags += ["--reference", str(reference)]
+    wall, cpu = render_caustic(args.binary, gltf, folder / "caustic", flags)
+    print(f"{name}: Caustic ran {wall:.1f} s wall, {cpu:.1f} s CPU ({cpu / wall:.2f} cores busy)")
+    cycles = []
+    for budget in args.budgets:
+        image = folder / f"cycles_{budget:g}s.exr"
+        wall, cpu = render_cycles(scene, budget / args.threads, args.threads, image)
+        error = relative_mse(args.binary, image, reference) if has_reference else None
+        cycles.append({"budget_cpu_s": budget, "wall_s": wall, "cpu_s": cpu, "relative_mse": error})
+        print(f"{name}: Cycles {budget:g} CPU s: call {wall:.1f} s wall, {cpu:.1f} s CPU, relative MSE {error}")
+    result = {"scene": name, "cycles": cycles}
+    if has_reference:
+        curve = caustic_curve(log, args.threads)
+        result["caustic_curve"] = curve
+        for row in cycles:
+            row["caustic_relative_mse"] = error_at(curve, row["budget_cpu_s"])
+            reach = time_to_reach(curve, row["relative_mse"])
+            row["caustic_time_to_cycles_error_s"] = reach
+            row["time_ratio"] = reach / row["budget_cpu_s"] if reach is not None else None
+    else:
+        lines = [json.loads(line) for line in log.read_text().splitlines() if line.strip()]
+        result["caustic_bound"] = [(args.threads * l["elapsed_s"], l["error"]["mean"], l["passes"]) for l in lines]
+    return result
+
+
+def fmt(value, spec):
+    return "-" if value is None else format(value, spec)
+
+
+def print_table(result):
+    print(f"\n{result['scene']}: relative MSE at equal CPU time")
+    print(f"{'CPU s':>7} {'Cycles':>10} {'Caustic':>10} {'Cycles/Caustic':>15} {'Caustic time to Cycles error':>30}")
+    for row in result["cycles"]:
+        ours, theirs = row.get("caustic_relative_mse"), row["relative_mse"]
+        ratio = theirs / ours if ours and theirs else None
+        reach = row.get("caustic_time_to_cycles_error_s")
+        print(f"{row['budget_cpu_s']:>7g} {fmt(theirs, '.3e'):>10} {fmt(ours, '.3e'):>10} {fmt(ratio, '.1f'):>14}x "
+              f"{fmt(reach, '.2f'):>20} s ({fmt(row.get('time_ratio'), '.3f')}x)")
+
+
+def chart(results, path):
+    """Error against CPU time, both renderers, one panel per scene with a reference."""
+    import matplotlib
+    matplotlib.use("svg")
+    import matplotlib.pyplot as plt
+    shown = [r for r in results if "caustic_curve" in r]
+    if not shown:
+        return
+    figure, axes = plt.subplots(1, len(shown), figsize=(6 * len(shown), 4.5), squeeze=False)
+    for ax, result in zip(axes[0], shown):
+        curve = [(t, e) for t, e, _ in result["caustic_curve"] if t > 0]
+        ax.loglog(*zip(*curve), "o-", label="Caustic (SPPM)")
+        cycles = [(r["budget_cpu_s"], r["relative_mse"]) for r in result["cycles"]]
+        ax.loglog(*zip(*cycles), "s--", label="Cycles (path tracing)")
+        ax.set_title(f"{result['scene']} scene")
+        ax.set_xlabel("CPU seconds (threads x wall time)")
+        ax.set_ylabel("relative MSE of luminance")
+        ax.grid(True, which="both", alpha=0.3)
+        ax.legend()
+    figure.tight_layout()
+    figure.savefig(path)
+    print(f"chart: {path}")
+
+
+def parse_resolution(text):
+    width, height = (int(v) for v in text.lower().split("x"))
+    return width, height
+
+
+def main():
+    parser = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
+    parser.add_argument("--budgets", default="10,30,100,300",
+                        type=lambda s: [float(v) for v in s.split(",")], help="CPU seconds")
+    parser.add_argument("--threads", type=int, default=2)
+    parser.add_argument("--resolution", type=parse_resolution, default=(256, 192))
+    parser.add_argument("--scenes", default="caustic,diffuse,spot", type=lambda s: s.split(","))
+    parser.add_argument("-o", "--out", type=pathlib.Path, default=ROOT / "bench-out")
+    parser.add_argument("--binary", default=str(ROOT / "target" / "release" / "caustic"))
+    parser.add_argument("--make-reference", type=int, metavar="PASSES",
+                        help="instead, render the scenes' references with this many passes")
+    args = parser.parse_args()
+    unknown = [s for s in args.scenes if s not in SCENES]
+    if unknown:
+        parser.error(f"unknown scene {unknown[0]!r}; the scenes are {', '.join(SCENES)}")
+    if not os.access(args.binary, os.X_OK):
+        parser.error(f"no caustic program at {args.binary}: run `cargo build --release` first")
+    if args.make_reference:
+        for name in args.scenes:
+            make_reference(args.binary, name, args)
+        return
+    args.out.mkdir(parents=True, exist_ok=True)
+    results = [bench_scene(name, args, args.out) for name in args.scenes]
+    for result in results:
+        if "caustic_curve" in result:
+            print_table(result)
+    (args.out / "results.json").write_text(json.dumps(results, indent=2) + "\n")
+    chart(results, args.out / "error_vs_time.svg")
+
+
+if __name__ == "__main__":
+    main()
