@@ -59,8 +59,9 @@ def plane(name, size, location, rotation, mat):
     return obj
 
 
-def glass_sphere(location, radius, mat):
-    bpy.ops.mesh.primitive_uv_sphere_add(segments=96, ring_count=48, radius=radius, location=location)
+def glass_sphere(location, radius, mat, segments=96):
+    bpy.ops.mesh.primitive_uv_sphere_add(segments=segments, ring_count=segments // 2, radius=radius,
+                                         location=location)
     obj = bpy.context.object
     obj.name = "GlassSphere"
     bpy.ops.object.shade_smooth()
@@ -137,13 +138,13 @@ def cornell_box(white, red, green):
     plane("RightWall", 2, (1, 0, 1), (0, -math.pi / 2, 0), green)
 
 
-def cornell_glass_scene():
-    """The demo scene, built but not exported."""
+def cornell_glass_scene(sphere_segments=96):
+    """The demo scene, built but not exported (`sphere_segments` around the sphere)."""
     reset()
     glass = cornell_box_with_glass()
     # A sphere of radius R and index 1.5 focuses at about 1.5 R beyond its centre: floating it
     # 0.2 above the floor puts the light's image near the floor, a sharp caustic.
-    glass_sphere((0.3, -0.3, 0.55), 0.35, glass)
+    glass_sphere((0.3, -0.3, 0.55), 0.35, glass, sphere_segments)
     area_light("CeilingLight", (-0.3, 0.4, 1.98), 0.2, 25.0)
     camera((0, -3.9, 1.0), (0, 0, 1.0))
     set_resolution(480, 360)

@@ -6,7 +6,7 @@
 //! occlusion tests, which pass through triangles that cast no shadow (area lights). Triangle indices number the fixed part first, then the moving part, as
 //! `Scene` does.
 
-use std::sync::Arc;
+use std::sync::{Arc, Mutex};
 use std::time::Duration;
 
 use glam::{Vec2, Vec3};
@@ -62,6 +62,28 @@ pub struct Accel {
     fixed: Arc<Bvh>,
     moving: Bvh,
     fixed_count: u32,
+    /// Every query asked, when recording (`caustic bench` replays them to time bare traversal).
+    recorder: Option<Mutex<Vec<RecordedRay>>>,
+}
+
+/// What a query asked for.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+enum Query {
+    /// The closest hit.
+    Closest,
+    /// The closest hit on a triangle that casts shadows.
+    ClosestOpaque,
+    /// Whether a triangle that casts shadows is in the way.
+    Occluded,
+}
+
+/// One query, as asked.
+#[derive(Clone, Copy, Debug)]
+pub struct RecordedRay {
+    origin: Vec3,
+    direction: Vec3,
+    t_max: f32,
+    query: Query,
 }
 
 impl Accel {
@@ -73,17 +95,48 @@ impl Accel {
     /// The fixed part's BVH with the moving part's (numbered after the fixed triangles).
     pub fn new(fixed: Arc<Bvh>, moving: Bvh) -> Self {
         let fixed_count = fixed.triangles.len() as u32;
-        Accel { fixed, moving, fixed_count }
+        Accel { fixed, moving, fixed_count, recorder: None }
+    }
+
+    /// This accelerator, recording every query from now on.
+    pub fn recording(self) -> Self {
+        Accel { recorder: Some(Mutex::new(Vec::new())), ..self }
+    }
+
+    /// The queries recorded so far (in the order threads asked them).
+    pub fn recorded(&self) -> Vec<RecordedRay> {
+        self.recorder.as_ref().map_or_else(Vec::new, |r| r.lock().expect("recorder").clone())
+    }
+
+    /// Asks `rays` again (bare traversal, nothing else); gives how many hit.
+    pub fn replay(&self, rays: &[RecordedRay]) -> usize {
+        let answer = |r: &RecordedRay| match r.query {
+            Query::Closest => self.closest(r.origin, r.direction, r.t_max, false).is_some(),
+            Query::ClosestOpaque => self.closest(r.origin, r.direction, r.t_max, true).is_some(),
+            Query::Occluded => {
+                self.fixed.occluded(r.origin, r.direction, r.t_max)
+                    || self.moving.occluded(r.origin, r.direction, r.t_max)
+            }
+        };
+        rays.iter().filter(|r| answer(r)).count()
+    }
+
+    fn note(&self, origin: Vec3, direction: Vec3, t_max: f32, query: Query) {
+        if let Some(recorder) = &self.recorder {
+            recorder.lock().expect("recorder").push(RecordedRay { origin, direction, t_max, query });
+        }
     }
 
     /// The closest hit along the ray from `origin` in the unit `direction` before `t_max`.
     pub fn intersect(&self, origin: Vec3, direction: Vec3, t_max: f32) -> Option<Hit> {
+        self.note(origin, direction, t_max, Query::Closest);
         self.closest(origin, direction, t_max, false)
     }
 
     /// The closest hit on a triangle that casts shadows (what photons meet: they pass through
     /// area lights as if they were not there).
     pub fn intersect_opaque(&self, origin: Vec3, direction: Vec3, t_max: f32) -> Option<Hit> {
+        self.note(origin, direction, t_max, Query::ClosestOpaque);
         self.closest(origin, direction, t_max, true)
     }
 
@@ -99,6 +152,7 @@ impl Accel {
     /// Whether anything that casts shadows lies on the ray from `origin` in the unit `direction`
     /// before `t_max`.
     pub fn occluded(&self, origin: Vec3, direction: Vec3, t_max: f32) -> bool {
+        self.note(origin, direction, t_max, Query::Occluded);
         self.fixed.occluded(origin, direction, t_max) || self.moving_occluded(origin, direction, t_max)
     }
 

@@ -9,6 +9,7 @@ use crate::film::{Film, FilmMode};
 use crate::frames::{self, load_description, RenderReport, RenderSettings, Shot};
 use crate::memory;
 use crate::sppm::{PassStats, Renderer};
+use rayon::prelude::*;
 
 /// Rays of every kind in `stats`.
 fn rays(stats: PassStats) -> u64 {
@@ -61,61 +62,112 @@ fn peak_memory() -> String {
         .map_or("unknown (the counting allocator is not installed)".into(), |m| format!("{m:.1} MiB"))
 }
 
-/// Runs the benchmark and prints its figures.
-pub fn run(scene_path: &Path, resolution: [u32; 2], passes: u64) -> Result<(), String> {
+/// Runs the benchmark and prints its figures: throughput and time split with 1 and 2 threads,
+/// the bare BVH traversal rate on the same rays, and peak memory.
+pub fn run(
+    scene_path: &Path,
+    resolution: [u32; 2],
+    passes: u64,
+    photons: Option<usize>,
+) -> Result<(), String> {
     let mut settings = RenderSettings::new(scene_path, Path::new("renders"));
     settings.resolution = Some(resolution);
+    settings.photons = photons;
     let description = load_description(&settings)?;
     let start = Instant::now();
     let shot = Shot::new(&settings, description)?;
     let (scene, accel) = shot.pose(0.0);
     println!(
-        "scene {} ({} triangles, {} lights), {}x{}, {} passes; BVH build {:.3} s",
+        "scene {} ({} triangles, {} lights), {}x{}, {} photon paths per pass, {} passes; BVH build {:.3} s",
         scene_path.display(),
         scene.triangle_count(),
         scene.lights.len(),
         resolution[0],
         resolution[1],
+        shot.sppm().photons_per_pass,
         passes,
         start.elapsed().as_secs_f64()
     );
     let renderer = Renderer::new(&scene, &accel, shot.sppm().clone());
+    let mut full_rates = Vec::new();
     for threads in [1, 2] {
-        let pool = rayon::ThreadPoolBuilder::new().num_threads(threads).build().map_err(|e| e.to_string())?;
-        let s = renderer.settings();
-        let mut film = Film::new(s.width, s.height, FilmMode::Spectral, 0);
-        let mut accumulation_s = 0.0;
-        let start = Instant::now();
-        let stats = pool.install(|| {
-            let mut stats = PassStats::default();
-            for i in 0..passes {
-                let (samples, estimates, pass_stats) = renderer.run_pass(i);
-                let added = Instant::now();
-                let sums = estimates.iter().map(|e| (e.radiance, e.laplacian));
-                film.add_pass(samples.lambda_nm, samples.lambda_pdf, samples.radius, sums);
-                accumulation_s += added.elapsed().as_secs_f64();
-                stats = stats + pass_stats;
-            }
-            stats
-        });
-        let seconds = start.elapsed().as_secs_f64();
-        let rays = stats.eye_rays + stats.shadow_rays + stats.photon_rays;
-        let photon_paths = passes * renderer.settings().photons_per_pass as u64;
-        println!(
-            "threads {threads}: {:.3} passes/s, {:.0} photon paths/s, {:.2} Mrays/s (eye {:.2}, shadow {:.2}, photon {:.2})",
-            passes as f64 / seconds,
-            photon_paths as f64 / seconds,
-            rays as f64 / seconds / 1e6,
-            stats.eye_rays as f64 / seconds / 1e6,
-            stats.shadow_rays as f64 / seconds / 1e6,
-            stats.photon_rays as f64 / seconds / 1e6,
+        let (seconds, (stats, accumulation_s)) = in_pool(threads, || time_passes(&renderer, passes))?;
+        full_rates.push(rays(stats) as f64 / seconds);
+        print_throughput(
+            threads,
+            passes,
+            seconds,
+            &stats,
+            accumulation_s,
+            renderer.settings().photons_per_pass,
         );
-        let [eye, photon, grid, gather] = stats.stage_ns.map(|ns| ns as f64 * 1e-9 / seconds * 100.0);
+    }
+    let (scene, accel) = shot.pose(0.0);
+    let accel = accel.recording();
+    Renderer::new(&scene, &accel, shot.sppm().clone()).run_pass(0);
+    let recorded = accel.recorded();
+    for (threads, full) in [1, 2].into_iter().zip(full_rates) {
+        let (seconds, _) =
+            in_pool(threads, || recorded.par_chunks(4096).map(|chunk| accel.replay(chunk)).sum::<usize>())?;
+        let raw = recorded.len() as f64 / seconds;
         println!(
-            "  time split: eye paths {eye:.0}%, photon paths {photon:.0}%, grid build {grid:.0}%, gather {gather:.0}%, accumulation {:.0}%",
-            accumulation_s / seconds * 100.0
+            "threads {threads}: bare obvhs traversal of one pass's {} rays: {:.2} Mrays/s; the full pass runs at {:.0}% of it",
+            recorded.len(),
+            raw / 1e6,
+            full / raw * 100.0
         );
     }
     println!("peak heap memory: {}", peak_memory());
     Ok(())
+}
+
+/// Runs `work` on a pool of `threads` workers; gives its wall time and result.
+fn in_pool<T: Send>(threads: usize, work: impl FnOnce() -> T + Send) -> Result<(f64, T), String> {
+    let pool = rayon::ThreadPoolBuilder::new().num_threads(threads).build().map_err(|e| e.to_string())?;
+    let start = Instant::now();
+    let result = pool.install(work);
+    Ok((start.elapsed().as_secs_f64(), result))
+}
+
+/// Renders `passes` passes into a film as a render does; gives the stats and the seconds spent
+/// adding passes to the film.
+fn time_passes(renderer: &Renderer, passes: u64) -> (PassStats, f64) {
+    let s = renderer.settings();
+    let mut film = Film::new(s.width, s.height, FilmMode::Spectral, 0);
+    let (mut stats, mut accumulation_s) = (PassStats::default(), 0.0);
+    for i in 0..passes {
+        let (samples, estimates, pass_stats) = renderer.run_pass(i);
+        let added = Instant::now();
+        let sums = estimates.iter().map(|e| (e.radiance, e.laplacian));
+        film.add_pass(samples.lambda_nm, samples.lambda_pdf, samples.radius, sums);
+        accumulation_s += added.elapsed().as_secs_f64();
+        stats = stats + pass_stats;
+    }
+    (stats, accumulation_s)
+}
+
+fn print_throughput(
+    threads: usize,
+    passes: u64,
+    seconds: f64,
+    stats: &PassStats,
+    accumulation_s: f64,
+    photons_per_pass: usize,
+) {
+    let per_second = |n: u64| n as f64 / seconds / 1e6;
+    println!(
+        "threads {threads}: {:.3} passes/s ({:.1} ms a pass), {:.0} photon paths/s, {:.2} Mrays/s (eye {:.2}, shadow {:.2}, photon {:.2})",
+        passes as f64 / seconds,
+        seconds / passes as f64 * 1e3,
+        (passes * photons_per_pass as u64) as f64 / seconds,
+        per_second(rays(*stats)),
+        per_second(stats.eye_rays),
+        per_second(stats.shadow_rays),
+        per_second(stats.photon_rays),
+    );
+    let [eye, photon, grid, gather] = stats.stage_ns.map(|ns| ns as f64 * 1e-9 / seconds * 100.0);
+    println!(
+        "  time split: eye paths {eye:.0}%, photon paths {photon:.0}%, grid build {grid:.0}%, gather {gather:.0}%, accumulation {:.0}%",
+        accumulation_s / seconds * 100.0
+    );
 }

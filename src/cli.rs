@@ -185,6 +185,9 @@ pub struct BenchArgs {
     /// Passes per measurement.
     #[arg(long, default_value_t = 8, value_parser = at_least_one)]
     passes: u64,
+    /// Photon paths per pass (default: one per pixel).
+    #[arg(long, value_name = "N", value_parser = at_least_one)]
+    photons: Option<u64>,
     /// Instead, render these frames with and without reuse across frames at equal passes (at the
     /// scene's resolution) and compare time, rays per frame and peak memory.
     #[arg(long, value_name = "SPEC", value_parser = parse_frames)]
@@ -376,7 +379,9 @@ pub fn run(cli: Cli) -> Result<(), String> {
             let scene = args.scene.unwrap_or_else(|| PathBuf::from(DEMO_SCENE));
             match args.frames {
                 Some(frames) => crate::bench::run_frames(&scene, frames.0, args.passes),
-                None => crate::bench::run(&scene, args.resolution, args.passes),
+                None => {
+                    crate::bench::run(&scene, args.resolution, args.passes, args.photons.map(|n| n as usize))
+                }
             }
         }
     }

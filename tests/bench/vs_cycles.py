@@ -36,42 +36,13 @@ import time
 
 ROOT = pathlib.Path(__file__).resolve().parents[2]
 HERE = ROOT / "tests" / "bench"
-sys.path.insert(0, str(ROOT / "tools"))
+sys.path.insert(0, str(HERE))
 
-import render_in_blender  # noqa: E402  (sets a temporary HOME, imports bpy and scenes/make_scenes.py)
+from blender_scenes import SCENES, build, export  # noqa: E402  (imports bpy)
 import bpy  # noqa: E402
 
-make_scenes = render_in_blender.make_scenes
-SCENES = {
-    "caustic": make_scenes.cornell_glass_scene,
-    "diffuse": make_scenes.cornell_diffuse_scene,
-    "spot": make_scenes.spot_glass_scene,
-}
 REFERENCE_SEED = 777
 BENCH_SEED = 1
-
-
-def build(name, resolution, binary):
-    """Builds scene `name` in Blender at `resolution`, without the extras the add-on writes itself,
-    and enables the add-on (Blender's factory reset, which starts every scene, disables it)."""
-    SCENES[name]()
-    render_in_blender.enable_addon(binary)
-    for obj in bpy.data.objects:
-        obj.pop("caustic", None)
-        # Caustic shows lights to the camera; Cycles hides area lights unless told.
-        obj.visible_camera = True
-    scene = bpy.context.scene
-    scene.pop("caustic", None)
-    scene.render.resolution_x, scene.render.resolution_y = resolution
-    scene.render.resolution_percentage = 100
-    return scene
-
-
-def export(scene, folder):
-    """The scene as the add-on exports it for a render; gives the glTF's path."""
-    path = folder / "scene.gltf"
-    sys.modules["caustic.export"].export(scene, path)
-    return path
 
 
 def cpu_seconds(who):

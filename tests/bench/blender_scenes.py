@@ -1,0 +1,42 @@
+"""The benchmarks' scenes, built in Blender (bpy) by scenes/make_scenes.py and exported by the
+add-on, as a user's render would export them."""
+import pathlib
+import sys
+
+ROOT = pathlib.Path(__file__).resolve().parents[2]
+sys.path.insert(0, str(ROOT / "tools"))
+
+import render_in_blender  # noqa: E402  (sets a temporary HOME, imports bpy and scenes/make_scenes.py)
+import bpy  # noqa: E402
+
+make_scenes = render_in_blender.make_scenes
+SCENES = {
+    "caustic": make_scenes.cornell_glass_scene,
+    "diffuse": make_scenes.cornell_diffuse_scene,
+    "spot": make_scenes.spot_glass_scene,
+    # The demo with 10x its triangles (a finer sphere), for cost against scene size.
+    "caustic_10x_triangles": lambda: make_scenes.cornell_glass_scene(sphere_segments=304),
+}
+
+
+def build(name, resolution, binary):
+    """Builds scene `name` in Blender at `resolution`, without the extras the add-on writes itself,
+    and enables the add-on (Blender's factory reset, which starts every scene, disables it)."""
+    SCENES[name]()
+    render_in_blender.enable_addon(binary)
+    for obj in bpy.data.objects:
+        obj.pop("caustic", None)
+        # Caustic shows lights to the camera; Cycles hides area lights unless told.
+        obj.visible_camera = True
+    scene = bpy.context.scene
+    scene.pop("caustic", None)
+    scene.render.resolution_x, scene.render.resolution_y = resolution
+    scene.render.resolution_percentage = 100
+    return scene
+
+
+def export(scene, folder):
+    """The scene as the add-on exports it for a render; gives the glTF's path."""
+    path = folder / "scene.gltf"
+    sys.modules["caustic.export"].export(scene, path)
+    return path
