@@ -57,20 +57,22 @@ fn within((lo, hi): (Vec3, Vec3), p: Vec3) -> bool {
     !(p.cmplt(lo).any() || p.cmpgt(hi).any())
 }
 
-/// Photons bucketed for gathering at one radius.
-pub struct PhotonSet<'a> {
-    photons: &'a [Photon],
+/// Photons bucketed for gathering at one radius (a copy, sorted by bucket, so that a gather
+/// reads each bucket's photons from consecutive memory).
+pub struct PhotonSet {
+    sorted: Vec<Photon>,
     grid: PhotonGrid,
     reach: Option<(Vec3, Vec3)>,
     kernel: Kernel,
 }
 
-impl<'a> PhotonSet<'a> {
+impl PhotonSet {
     /// Buckets `photons` for gathers of radius `radius`.
-    pub fn new(photons: &'a [Photon], radius: f32) -> Self {
-        let grid = PhotonGrid::build(photons.iter().map(|p| p.p), photons.len(), radius);
+    pub fn new(photons: &[Photon], radius: f32) -> Self {
+        let (grid, order) = PhotonGrid::build(photons.iter().map(|p| p.p), photons.len(), radius);
+        let sorted = order.iter().map(|&i| photons[i as usize]).collect();
         let reach = reach(photons.iter().map(|p| p.p), radius);
-        PhotonSet { photons, grid, reach, kernel: Kernel::new(radius) }
+        PhotonSet { sorted, grid, reach, kernel: Kernel::new(radius) }
     }
 
     /// The kernel-weighted sum of the photons' reflected flux at `vp`, and the same with the
@@ -78,9 +80,11 @@ impl<'a> PhotonSet<'a> {
     pub fn sum_at(&self, vp: &VisiblePoint) -> [f32; 2] {
         let mut sums = [0.0f32; 2];
         if self.reach.is_some_and(|r| within(r, vp.p)) {
-            self.grid.for_each_near(vp.p, |i| {
-                if let Some([k, l]) = self.kernel.weigh(&self.photons[i], vp) {
-                    sums = [sums[0] + k, sums[1] + l];
+            self.grid.for_each_near(vp.p, |range| {
+                for photon in &self.sorted[range] {
+                    if let Some([k, l]) = self.kernel.weigh(photon, vp) {
+                        sums = [sums[0] + k, sums[1] + l];
+                    }
                 }
             });
         }

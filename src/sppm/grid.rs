@@ -2,15 +2,16 @@
 //! gathering per pixel from photons keeps the result independent of thread timing).
 //!
 //! Cells are `2 r` wide, so the photons within `r` of a point lie in the 2 x 2 x 2 cells around
-//! it. Photons are sorted by bucket with a counting sort in photon order: deterministic.
+//! it. Photons are sorted by bucket with a counting sort in photon order (deterministic); the
+//! caller keeps its photons in that order, so a bucket's photons lie side by side in memory.
 
 use glam::{IVec3, Vec3};
 
-/// Photon indices bucketed by hashed grid cell.
+/// Buckets of hashed grid cells over photons sorted by bucket: bucket `b` holds the sorted
+/// photons `bucket_start[b]..bucket_start[b + 1]`.
 pub struct PhotonGrid {
     cell_size: f32,
     bucket_start: Vec<u32>,
-    photon_indices: Vec<u32>,
 }
 
 fn hash_cell(cell: IVec3, buckets: usize) -> usize {
@@ -21,8 +22,13 @@ fn hash_cell(cell: IVec3, buckets: usize) -> usize {
 }
 
 impl PhotonGrid {
-    /// Buckets `positions` for lookups of radius `radius`.
-    pub fn build(positions: impl Iterator<Item = Vec3> + Clone, count: usize, radius: f32) -> Self {
+    /// Buckets `positions` for lookups of radius `radius`; gives the grid and the order to keep
+    /// the photons in (the index in `positions` of each sorted photon).
+    pub fn build(
+        positions: impl Iterator<Item = Vec3> + Clone,
+        count: usize,
+        radius: f32,
+    ) -> (Self, Vec<u32>) {
         let cell_size = 2.0 * radius;
         let buckets = (2 * count).max(1);
         let bucket_of = |p: Vec3| hash_cell((p / cell_size).floor().as_ivec3(), buckets);
@@ -34,18 +40,19 @@ impl PhotonGrid {
             bucket_start[i] += bucket_start[i - 1];
         }
         let mut next = bucket_start.clone();
-        let mut photon_indices = vec![0u32; count];
+        let mut order = vec![0u32; count];
         for (i, p) in positions.enumerate() {
             let b = bucket_of(p);
-            photon_indices[next[b] as usize] = i as u32;
+            order[next[b] as usize] = i as u32;
             next[b] += 1;
         }
-        PhotonGrid { cell_size, bucket_start, photon_indices }
+        (PhotonGrid { cell_size, bucket_start }, order)
     }
 
-    /// Calls `visit` with every photon index whose cell is within the 2 x 2 x 2 block around `p`
-    /// (a superset of the photons within the radius; the caller checks distances).
-    pub fn for_each_near(&self, p: Vec3, mut visit: impl FnMut(usize)) {
+    /// Calls `visit` with the range of sorted photons of every bucket within the 2 x 2 x 2 block
+    /// of cells around `p` (a superset of the photons within the radius; the caller checks
+    /// distances).
+    pub fn for_each_near(&self, p: Vec3, mut visit: impl FnMut(std::ops::Range<usize>)) {
         let buckets = self.bucket_start.len() - 1;
         let base = (p / self.cell_size - 0.5).floor().as_ivec3();
         let mut seen = [usize::MAX; 8];
@@ -55,10 +62,7 @@ impl PhotonGrid {
                 continue;
             }
             seen[k] = b;
-            let range = self.bucket_start[b] as usize..self.bucket_start[b + 1] as usize;
-            for &i in &self.photon_indices[range] {
-                visit(i as usize);
-            }
+            visit(self.bucket_start[b] as usize..self.bucket_start[b + 1] as usize);
         }
     }
 }
@@ -73,13 +77,13 @@ mod tests {
             .map(|i| Vec3::new((i * 37 % 101) as f32, (i * 53 % 89) as f32, (i * 11 % 97) as f32) * 0.01)
             .collect();
         let radius = 0.07;
-        let grid = PhotonGrid::build(points.iter().copied(), points.len(), radius);
+        let (grid, order) = PhotonGrid::build(points.iter().copied(), points.len(), radius);
         for q in [Vec3::splat(0.3), Vec3::new(0.05, 0.8, 0.41), Vec3::new(-0.02, 0.0, 0.9)] {
             let mut found = Vec::new();
-            grid.for_each_near(q, |i| {
-                if points[i].distance(q) < radius {
-                    found.push(i)
-                }
+            grid.for_each_near(q, |range| {
+                let near =
+                    order[range].iter().map(|&i| i as usize).filter(|&i| points[i].distance(q) < radius);
+                found.extend(near)
             });
             found.sort();
             let expected: Vec<usize> =
