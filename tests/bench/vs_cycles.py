@@ -5,6 +5,7 @@ test: run it by hand on an idle machine, release build first):
     target/bpy-venv/bin/pip install matplotlib        # once; `cargo test` made the venv
     target/bpy-venv/bin/python tests/bench/vs_cycles.py [--budgets 10,30,100,300] [--threads 2]
                                                         [--scenes caustic,diffuse,spot] [-o bench-out]
+                                                        [--caustic-flags "--radius 0.07"]
 
 Each scene is built in Blender (bpy) by scenes/make_scenes.py, exported by the add-on for Caustic
 and rendered by Cycles from the same in-memory .blend: CPU device, the same thread count,
@@ -18,7 +19,8 @@ The error is the relative MSE of luminance, mean of (Y - Y_ref)^2 / (Y_ref^2 + f
 the reference's mean (`caustic compare`), against tests/bench/<scene>.exr: a long Caustic render
 with another seed, whose provenance is in tests/bench/references.json (`--make-reference PASSES`
 writes both). Prints, per scene, both errors at each budget and the ratio of the time Caustic
-needs to reach Cycles' error to Cycles' time; writes OUT/error_vs_time.svg and the last images.
+needs to reach Cycles' error to Cycles' time; writes OUT/results.json, OUT/error_vs_time.svg and
+per scene OUT/<scene>/sheet.png (Cycles at each budget above; Caustic below, with the reference).
 The spot scene (a point spot through glass, which Cycles cannot render) is rendered by both at
 each budget; its Caustic images and error bounds show it converging.
 """
@@ -138,22 +140,28 @@ def make_reference(binary, name, args):
     print(f"{name}: reference of {args.make_reference} passes in {wall:.0f} s -> {HERE / (name + '.exr')}")
 
 
+def caustic_flags(args, budget, log):
+    return ["--time-budget", str(budget / args.threads), "--threads", str(args.threads), "--seed", str(BENCH_SEED),
+            "--log", str(log), *args.caustic_flags.split()]
+
+
 def bench_scene(name, args, out):
-    """Both renderers at every budget; gives the scene's results."""
+    """Both renderers at every budget; gives the scene's results. With a reference, Caustic
+    renders once (its log gives the error along the way); without one (the spot scene), once per
+    budget, so that its images show it converging."""
     scene = build(name, args.resolution, args.binary)
     folder = out / name
     folder.mkdir(parents=True, exist_ok=True)
     gltf = export(scene, folder)
     reference = HERE / f"{name}.exr"
     has_reference = reference.exists()
-    log = folder / "caustic.log"
-    log.unlink(missing_ok=True)
-    flags = ["--time-budget", str(max(args.budgets) / args.threads), "--threads", str(args.threads),
-             "--seed", str(BENCH_SEED), "--log", str(log)]
-    if has_reference:
-        flags += ["--reference", str(reference)]
-    wall, cpu = render_caustic(args.binary, gltf, folder / "caustic", flags)
-    print(f"{name}: Caustic ran {wall:.1f} s wall, {cpu:.1f} s CPU ({cpu / wall:.2f} cores busy)")
+    runs = [max(args.budgets)] if has_reference else args.budgets
+    for budget in runs:
+        log = folder / f"caustic_{budget:g}s.log"
+        log.unlink(missing_ok=True)
+        flags = caustic_flags(args, budget, log) + (["--reference", str(reference)] if has_reference else [])
+        wall, cpu = render_caustic(args.binary, gltf, folder / f"caustic_{budget:g}s", flags)
+        print(f"{name}: Caustic {budget:g} CPU s: ran {wall:.1f} s wall, {cpu:.1f} s CPU ({cpu / wall:.2f} cores busy)")
     cycles = []
     for budget in args.budgets:
         image = folder / f"cycles_{budget:g}s.exr"
@@ -162,18 +170,35 @@ def bench_scene(name, args, out):
         cycles.append({"budget_cpu_s": budget, "wall_s": wall, "cpu_s": cpu, "relative_mse": error})
         print(f"{name}: Cycles {budget:g} CPU s: call {wall:.1f} s wall, {cpu:.1f} s CPU, relative MSE {error}")
     result = {"scene": name, "cycles": cycles}
+    last_log = folder / f"caustic_{max(args.budgets):g}s.log"
+    lines = [json.loads(line) for line in last_log.read_text().splitlines() if line.strip()]
+    result["caustic_bound"] = [(args.threads * l["elapsed_s"], l["error"]["mean"], l["passes"]) for l in lines]
     if has_reference:
-        curve = caustic_curve(log, args.threads)
+        curve = caustic_curve(last_log, args.threads)
         result["caustic_curve"] = curve
         for row in cycles:
             row["caustic_relative_mse"] = error_at(curve, row["budget_cpu_s"])
             reach = time_to_reach(curve, row["relative_mse"])
             row["caustic_time_to_cycles_error_s"] = reach
             row["time_ratio"] = reach / row["budget_cpu_s"] if reach is not None else None
-    else:
-        lines = [json.loads(line) for line in log.read_text().splitlines() if line.strip()]
-        result["caustic_bound"] = [(args.threads * l["elapsed_s"], l["error"]["mean"], l["passes"]) for l in lines]
+    contact_sheet(folder, runs, args.budgets, reference if has_reference else None)
     return result
+
+
+def contact_sheet(folder, caustic_budgets, cycles_budgets, reference):
+    """OUT/<scene>/sheet.png: Cycles at each budget above, Caustic below (and the reference)."""
+    from PIL import Image
+    from exr_to_png import srgb_image
+    rows = [[srgb_image(folder / f"cycles_{b:g}s.exr") for b in cycles_budgets],
+            [srgb_image(folder / f"caustic_{b:g}s" / "frame_0001.exr") for b in caustic_budgets]]
+    if reference is not None:
+        rows[1].append(srgb_image(reference))
+    width, height = rows[0][0].size
+    sheet = Image.new("RGB", (width * max(len(r) for r in rows), height * len(rows)))
+    for y, row in enumerate(rows):
+        for x, image in enumerate(row):
+            sheet.paste(image, (x * width, y * height))
+    sheet.save(folder / "sheet.png")
 
 
 def fmt(value, spec):
@@ -192,22 +217,24 @@ def print_table(result):
 
 
 def chart(results, path):
-    """Error against CPU time, both renderers, one panel per scene with a reference."""
+    """Error against CPU time, one panel per scene: both renderers' relative MSE where there is a
+    reference, else Caustic's own estimated error bound."""
     import matplotlib
     matplotlib.use("svg")
     import matplotlib.pyplot as plt
-    shown = [r for r in results if "caustic_curve" in r]
-    if not shown:
-        return
-    figure, axes = plt.subplots(1, len(shown), figsize=(6 * len(shown), 4.5), squeeze=False)
-    for ax, result in zip(axes[0], shown):
-        curve = [(t, e) for t, e, _ in result["caustic_curve"] if t > 0]
-        ax.loglog(*zip(*curve), "o-", label="Caustic (SPPM)")
-        cycles = [(r["budget_cpu_s"], r["relative_mse"]) for r in result["cycles"]]
-        ax.loglog(*zip(*cycles), "s--", label="Cycles (path tracing)")
+    figure, axes = plt.subplots(1, len(results), figsize=(5.5 * len(results), 4.5), squeeze=False)
+    for ax, result in zip(axes[0], results):
+        if "caustic_curve" in result:
+            ax.loglog(*zip(*[(t, e) for t, e, _ in result["caustic_curve"] if t > 0]), "o-", label="Caustic (SPPM)")
+            cycles = [(r["budget_cpu_s"], r["relative_mse"]) for r in result["cycles"]]
+            ax.loglog(*zip(*cycles), "s--", label="Cycles (path tracing)")
+            ax.set_ylabel("relative MSE of luminance")
+        else:
+            bound = [(t, e) for t, e, _ in result["caustic_bound"] if t > 0]
+            ax.loglog(*zip(*bound), "o-", label="Caustic: estimated mean relative error bound")
+            ax.set_ylabel("mean relative error (estimated)")
         ax.set_title(f"{result['scene']} scene")
         ax.set_xlabel("CPU seconds (threads x wall time)")
-        ax.set_ylabel("relative MSE of luminance")
         ax.grid(True, which="both", alpha=0.3)
         ax.legend()
     figure.tight_layout()
@@ -229,6 +256,7 @@ def main():
     parser.add_argument("--scenes", default="caustic,diffuse,spot", type=lambda s: s.split(","))
     parser.add_argument("-o", "--out", type=pathlib.Path, default=ROOT / "bench-out")
     parser.add_argument("--binary", default=str(ROOT / "target" / "release" / "caustic"))
+    parser.add_argument("--caustic-flags", default="", help="more flags for caustic render, e.g. '--radius 0.07'")
     parser.add_argument("--make-reference", type=int, metavar="PASSES",
                         help="instead, render the scenes' references with this many passes")
     args = parser.parse_args()
