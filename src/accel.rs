@@ -3,8 +3,8 @@
 //! and one for the moving part (built per pose, small).
 //!
 //! Takes triangle corners; gives closest hits (triangle index, distance, barycentrics) and
-//! occlusion tests, which pass through triangles that cast no shadow (area lights). Triangle indices number the fixed part first, then the moving part, as
-//! `Scene` does.
+//! occlusion tests, which pass through triangles that cast no shadow (area lights). Triangle
+//! indices number the fixed part first, then the moving part, as `Scene` does.
 
 use std::sync::{Arc, Mutex};
 use std::time::Duration;
@@ -89,7 +89,7 @@ pub struct RecordedRay {
 impl Accel {
     /// A BVH over `corners`, all fixed and all casting shadows.
     pub fn build(corners: &[[Vec3; 3]]) -> Self {
-        Accel::new(Arc::new(Bvh::build(corners, &vec![true; corners.len()])), Bvh::build(&[], &[]))
+        Accel::new(Arc::new(Bvh::build(corners, &vec![true; corners.len()])), Bvh::empty())
     }
 
     /// The fixed part's BVH with the moving part's (numbered after the fixed triangles).
@@ -113,10 +113,7 @@ impl Accel {
         let answer = |r: &RecordedRay| match r.query {
             Query::Closest => self.closest(r.origin, r.direction, r.t_max, false).is_some(),
             Query::ClosestOpaque => self.closest(r.origin, r.direction, r.t_max, true).is_some(),
-            Query::Occluded => {
-                self.fixed.occluded(r.origin, r.direction, r.t_max)
-                    || self.moving.occluded(r.origin, r.direction, r.t_max)
-            }
+            Query::Occluded => self.blocked(r.origin, r.direction, r.t_max),
         };
         rays.iter().filter(|r| answer(r)).count()
     }
@@ -153,10 +150,15 @@ impl Accel {
     /// before `t_max`.
     pub fn occluded(&self, origin: Vec3, direction: Vec3, t_max: f32) -> bool {
         self.note(origin, direction, t_max, Query::Occluded);
-        self.fixed.occluded(origin, direction, t_max) || self.moving_occluded(origin, direction, t_max)
+        self.blocked(origin, direction, t_max)
     }
 
-    /// Whether a moving triangle that casts shadows lies on the ray before `t_max` (the fixed part is not tested).
+    fn blocked(&self, origin: Vec3, direction: Vec3, t_max: f32) -> bool {
+        self.fixed.occluded(origin, direction, t_max) || self.moving.occluded(origin, direction, t_max)
+    }
+
+    /// Whether a moving triangle that casts shadows lies on the ray before `t_max` (the fixed part
+    /// is not tested).
     pub fn moving_occluded(&self, origin: Vec3, direction: Vec3, t_max: f32) -> bool {
         self.moving.occluded(origin, direction, t_max)
     }
@@ -171,6 +173,11 @@ impl Accel {
 }
 
 impl Bvh {
+    /// A BVH over no triangles (the moving part of a still scene).
+    pub fn empty() -> Self {
+        Bvh::build(&[], &[])
+    }
+
     /// Builds the BVH over `corners` (one entry per triangle), with whether each casts shadows.
     pub fn build(corners: &[[Vec3; 3]], casts_shadow: &[bool]) -> Self {
         debug_assert_eq!(corners.len(), casts_shadow.len());

@@ -306,8 +306,8 @@ impl Shot {
             seed: settings.seed,
             fixed_wavelength_nm: settings.wavelength_nm,
         };
-        let still = (!prepared.has_motion())
-            .then(|| (first, Accel::new(Arc::clone(&fixed_bvh), Bvh::build(&[], &[]))));
+        let still =
+            (!prepared.has_motion()).then(|| (first, Accel::new(Arc::clone(&fixed_bvh), Bvh::empty())));
         let identity = match settings.partial_passes {
             Some(_) => Some((
                 partial::scene_sha256(&settings.scene)?,
@@ -342,7 +342,7 @@ impl Shot {
 
     /// The fixed part's BVH alone (what paths shared between frames are traced against).
     fn fixed_accel(&self) -> Accel {
-        Accel::new(Arc::clone(&self.fixed_bvh), Bvh::build(&[], &[]))
+        Accel::new(Arc::clone(&self.fixed_bvh), Bvh::empty())
     }
 
     /// The pose `frame` renders pass `pass` in (its `own` when it has one for all its passes);
