@@ -14,6 +14,10 @@ use crate::error::{
 };
 use crate::film::Film;
 
+/// Passes before a target error may stop a frame: the variance estimated from fewer passes is too
+/// uncertain itself (a mean bound of 0.25 was once met after 2 passes at a true error of 0.69).
+const MIN_PASSES_TO_STOP: u64 = 16;
+
 /// What `caustic render` was asked about errors.
 #[derive(Clone, Debug)]
 pub struct ErrorSettings {
@@ -154,10 +158,9 @@ impl Monitor {
             self.next_log_pass *= 2;
             self.write_line(film, &errors, summary, elapsed_s, photons, None)?;
         }
-        Ok(self
-            .settings
-            .target
-            .is_some_and(|(target, statistic)| film.passes >= 2 && summary.get(statistic) <= target))
+        Ok(self.settings.target.is_some_and(|(target, statistic)| {
+            film.passes >= MIN_PASSES_TO_STOP && summary.get(statistic) <= target
+        }))
     }
 
     /// Called when the frame ends: the last log line, with what stopped it; gives the errors.

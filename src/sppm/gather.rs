@@ -15,6 +15,11 @@ use super::grid::PhotonGrid;
 use super::photons::Photon;
 use super::renderer::{PixelEstimate, VisiblePoint};
 use super::visible::EyeResult;
+use crate::error::K2;
+
+/// Photons on surfaces whose normal is within this cosine of perpendicular to the visible
+/// point's (past it on the far side: the back of a thin wall) mark an edge.
+const EDGE_COSINE: f32 = 0.5;
 
 /// The biweight kernel of one radius and its Laplacian.
 #[derive(Clone, Copy)]
@@ -35,15 +40,33 @@ impl Kernel {
     /// Laplacian), or `None` when it is out of reach or on the other side.
     fn weigh(&self, photon: &Photon, vp: &VisiblePoint) -> Option<[f32; 2]> {
         let d2 = photon.p.distance_squared(vp.p);
-        if d2 >= self.r2 || photon.ng.dot(vp.frame.ng) * vp.frame.ng.dot(vp.wo) <= 0.0 {
+        if d2 >= self.r2 {
             return None;
         }
         let t2 = d2 / self.r2;
+        let facing = photon.ng.dot(vp.frame.ng) * vp.frame.ng.dot(vp.wo).signum();
+        if facing <= 0.0 {
+            return (facing > -EDGE_COSINE).then(|| [0.0, self.edge_term(photon, vp, t2)]);
+        }
         let weighted = photon.flux * vp.bsdf.eval(vp.frame.n, vp.wo, photon.wi);
         Some([
             weighted * self.scale * (1.0 - t2) * (1.0 - t2),
             weighted * self.laplacian_scale * (1.0 - 2.0 * t2),
         ])
+    }
+
+    /// A photon on a surface meeting the visible point's at an edge stands for the photons the
+    /// disc misses beyond that edge: what it would add there (its direction mirrored to the
+    /// visible point's side), as a negative bias in Laplacian units (`bias = k2 r^2 / 2 * term`).
+    fn edge_term(&self, photon: &Photon, vp: &VisiblePoint, t2: f32) -> f32 {
+        let n = vp.frame.n;
+        let wi = if photon.wi.dot(n) * vp.wo.dot(n) < 0.0 {
+            photon.wi - 2.0 * photon.wi.dot(n) * n
+        } else {
+            photon.wi
+        };
+        let missed = photon.flux * vp.bsdf.eval(n, vp.wo, wi) * self.scale * (1.0 - t2) * (1.0 - t2);
+        -missed / (0.5 * K2 as f32 * self.r2)
     }
 }
 
