@@ -11,7 +11,7 @@ use super::direct::{DirectLight, DirectTerm};
 use super::renderer::{PassSamples, PassStats, Renderer, VisiblePoint, MAX_DEPTH};
 use crate::geometry::offset_origin;
 use crate::materials::{Bsdf, Transport};
-use crate::sampling::{stream, Sampler, Stream};
+use crate::sampling::{pixel_stream, Sampler};
 
 /// A pixel's eye path: the radiance found along it, and its visible point if it has one.
 #[derive(Clone, Copy, Debug)]
@@ -55,7 +55,7 @@ pub struct EyeEnd {
 pub fn start_eye_path(renderer: &Renderer, pass: &PassSamples, pixel: usize) -> (EyeState, PassStats) {
     let settings = &renderer.settings;
     let camera = &renderer.scene.camera;
-    let mut rng = stream(settings.seed, Stream::Eye, pass.index, pixel as u64);
+    let mut rng = pixel_stream(settings.seed, pass.index, pixel as u64);
     let (width, height) = (settings.width as usize, settings.height as usize);
     let film = (Vec2::new((pixel % width) as f32, (pixel / width) as f32) + rng.next_2d())
         / Vec2::new(width as f32, height as f32);
