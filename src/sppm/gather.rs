@@ -92,9 +92,10 @@ pub struct PhotonSet {
 impl PhotonSet {
     /// Buckets `photons` for gathers of radius `radius`.
     pub fn new(photons: &[Photon], radius: f32) -> Self {
-        let (grid, order) = PhotonGrid::build(photons.iter().map(|p| p.p), photons.len(), radius);
-        let sorted = order.iter().map(|&i| photons[i as usize]).collect();
-        let reach = reach(photons.iter().map(|p| p.p), radius);
+        let positions: Vec<Vec3> = photons.par_iter().with_min_len(4096).map(|p| p.p).collect();
+        let (grid, order) = PhotonGrid::build(&positions, radius);
+        let sorted = order.par_iter().with_min_len(4096).map(|&i| photons[i as usize]).collect();
+        let reach = reach(positions.iter().copied(), radius);
         PhotonSet { sorted, grid, reach, kernel: Kernel::new(radius) }
     }
 

@@ -6,6 +6,7 @@
 //! caller keeps its photons in that order, so a bucket's photons lie side by side in memory.
 
 use glam::{IVec3, Vec3};
+use rayon::prelude::*;
 
 /// Buckets of hashed grid cells over photons sorted by bucket: bucket `b` holds the sorted
 /// photons `bucket_start[b]..bucket_start[b + 1]`.
@@ -23,28 +24,28 @@ fn hash_cell(cell: IVec3, buckets: usize) -> usize {
 
 impl PhotonGrid {
     /// Buckets `positions` for lookups of radius `radius`; gives the grid and the order to keep
-    /// the photons in (the index in `positions` of each sorted photon).
-    pub fn build(
-        positions: impl Iterator<Item = Vec3> + Clone,
-        count: usize,
-        radius: f32,
-    ) -> (Self, Vec<u32>) {
+    /// the photons in (the index in `positions` of each sorted photon). Each photon's bucket is
+    /// found in parallel; the counting sort that follows is serial, in photon order.
+    pub fn build(positions: &[Vec3], radius: f32) -> (Self, Vec<u32>) {
         let cell_size = 2.0 * radius;
-        let buckets = (2 * count).max(1);
-        let bucket_of = |p: Vec3| hash_cell((p / cell_size).floor().as_ivec3(), buckets);
+        let buckets = (2 * positions.len()).max(1);
+        let bucket_of: Vec<u32> = positions
+            .par_iter()
+            .with_min_len(4096)
+            .map(|&p| hash_cell((p / cell_size).floor().as_ivec3(), buckets) as u32)
+            .collect();
         let mut bucket_start = vec![0u32; buckets + 1];
-        for p in positions.clone() {
-            bucket_start[bucket_of(p) + 1] += 1;
+        for &b in &bucket_of {
+            bucket_start[b as usize + 1] += 1;
         }
         for i in 1..=buckets {
             bucket_start[i] += bucket_start[i - 1];
         }
         let mut next = bucket_start.clone();
-        let mut order = vec![0u32; count];
-        for (i, p) in positions.enumerate() {
-            let b = bucket_of(p);
-            order[next[b] as usize] = i as u32;
-            next[b] += 1;
+        let mut order = vec![0u32; positions.len()];
+        for (i, &b) in bucket_of.iter().enumerate() {
+            order[next[b as usize] as usize] = i as u32;
+            next[b as usize] += 1;
         }
         (PhotonGrid { cell_size, bucket_start }, order)
     }
@@ -77,7 +78,7 @@ mod tests {
             .map(|i| Vec3::new((i * 37 % 101) as f32, (i * 53 % 89) as f32, (i * 11 % 97) as f32) * 0.01)
             .collect();
         let radius = 0.07;
-        let (grid, order) = PhotonGrid::build(points.iter().copied(), points.len(), radius);
+        let (grid, order) = PhotonGrid::build(&points, radius);
         for q in [Vec3::splat(0.3), Vec3::new(0.05, 0.8, 0.41), Vec3::new(-0.02, 0.0, 0.9)] {
             let mut found = Vec::new();
             grid.for_each_near(q, |range| {
