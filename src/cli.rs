@@ -102,7 +102,8 @@ pub struct RenderArgs {
     /// Radius reduction alpha of Knaus & Zwicker, in (0, 1).
     #[arg(long, value_name = "A", default_value_t = 2.0 / 3.0, allow_negative_numbers = true, value_parser = unit_interval)]
     alpha: f64,
-    /// First-pass gather radius in scene units (default: 2% of the scene's bounding diameter).
+    /// First-pass gather radius in scene units (default: 2% of the scene's bounding diameter, times
+    /// (49152 / photons per pass)^(1/6) above 49,152 photons a pass).
     #[arg(long, value_name = "R", allow_negative_numbers = true, value_parser = positive_f64)]
     radius: Option<f64>,
     /// Image size WxH (default: the scene's, else 640 wide at the camera's aspect).
