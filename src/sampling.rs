@@ -272,6 +272,21 @@ mod tests {
         assert_ne!(a, stream(7, Stream::Eye, 4, 11).next_1d());
     }
 
+    /// Over 256 passes, a pixel's film positions fill all 16 x 16 strata of the pixel, one each
+    /// (independent draws leave about 95 of the 256 strata empty); other pixels' positions differ.
+    #[test]
+    fn a_pixels_film_samples_are_stratified_over_passes() {
+        for pixel in [0, 1, 4097] {
+            let mut strata = [0u32; 256];
+            for pass in 0..256 {
+                let u = pixel_stream(5, pass, pixel).next_2d();
+                strata[(u.y * 16.0) as usize * 16 + (u.x * 16.0) as usize] += 1;
+            }
+            assert!(strata.iter().all(|&n| n == 1), "pixel {pixel}: {strata:?}");
+        }
+        assert_ne!(pixel_stream(5, 3, 0).next_2d(), pixel_stream(5, 3, 1).next_2d());
+    }
+
     #[test]
     fn pass_samples_are_stratified() {
         let mut samples: Vec<f32> = (0..64).map(|i| pass_sample(1, i)).collect();

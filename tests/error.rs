@@ -62,6 +62,22 @@ fn a_target_error_stops_the_frame_below_it() {
     assert!(last["passes"].as_u64().unwrap() < 100_000);
 }
 
+/// A target error that the first passes already meet (a mean relative bound of 10) does not
+/// stop the frame before its 16th pass: a variance from fewer passes is too uncertain to trust.
+#[test]
+fn a_target_error_waits_for_sixteen_passes() {
+    let dir = tempfile::tempdir().unwrap();
+    let lines = logged_render("furnace.gltf", 1000, Some(10.0), dir.path());
+    let early = lines.iter().find(|l| l["passes"] == 2).unwrap();
+    assert!(early["error"]["mean"].as_f64().unwrap() <= 10.0, "{early}");
+    let last = lines.last().unwrap();
+    assert_eq!(
+        (last["stopped_by"].as_str(), last["passes"].as_u64()),
+        (Some("target_error"), Some(16)),
+        "{last}"
+    );
+}
+
 /// The EXR carries the bound and the variance beside Combined, and `caustic plot` draws a log.
 #[test]
 fn error_passes_and_the_chart_are_written() {
