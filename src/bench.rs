@@ -67,7 +67,7 @@ fn peak_memory() -> String {
 pub fn run(
     scene_path: &Path,
     resolution: [u32; 2],
-    passes: u64,
+    passes: std::ops::Range<u64>,
     photons: Option<usize>,
 ) -> Result<(), String> {
     let mut settings = RenderSettings::new(scene_path, Path::new("renders"));
@@ -78,24 +78,25 @@ pub fn run(
     let shot = Shot::new(&settings, description)?;
     let (scene, accel) = shot.pose(0.0);
     println!(
-        "scene {} ({} triangles, {} lights), {}x{}, {} photon paths per pass, {} passes; BVH build {:.3} s",
+        "scene {} ({} triangles, {} lights), {}x{}, {} photon paths per pass, passes {}..{}; BVH build {:.3} s",
         scene_path.display(),
         scene.triangle_count(),
         scene.lights.len(),
         resolution[0],
         resolution[1],
         shot.sppm().photons_per_pass,
-        passes,
+        passes.start,
+        passes.end,
         start.elapsed().as_secs_f64()
     );
     let renderer = Renderer::new(&scene, &accel, shot.sppm().clone());
     let mut full_rates = Vec::new();
     for threads in [1, 2] {
-        let (seconds, (stats, accumulation_s)) = in_pool(threads, || time_passes(&renderer, passes))?;
+        let (seconds, (stats, accumulation_s)) = in_pool(threads, || time_passes(&renderer, passes.clone()))?;
         full_rates.push(rays(stats) as f64 / seconds);
         print_throughput(
             threads,
-            passes,
+            passes.end - passes.start,
             seconds,
             &stats,
             accumulation_s,
@@ -104,7 +105,7 @@ pub fn run(
     }
     let (scene, accel) = shot.pose(0.0);
     let accel = accel.recording();
-    Renderer::new(&scene, &accel, shot.sppm().clone()).run_pass(0);
+    Renderer::new(&scene, &accel, shot.sppm().clone()).run_pass(passes.start);
     let recorded = accel.recorded();
     for (threads, full) in [1, 2].into_iter().zip(full_rates) {
         let (seconds, _) =
@@ -129,13 +130,13 @@ fn in_pool<T: Send>(threads: usize, work: impl FnOnce() -> T + Send) -> Result<(
     Ok((start.elapsed().as_secs_f64(), result))
 }
 
-/// Renders `passes` passes into a film as a render does; gives the stats and the seconds spent
-/// adding passes to the film.
-fn time_passes(renderer: &Renderer, passes: u64) -> (PassStats, f64) {
+/// Renders `passes` into a film as a render does; gives the stats and the seconds spent adding
+/// passes to the film.
+fn time_passes(renderer: &Renderer, passes: std::ops::Range<u64>) -> (PassStats, f64) {
     let s = renderer.settings();
     let mut film = Film::new(s.width, s.height, FilmMode::Spectral, 0);
     let (mut stats, mut accumulation_s) = (PassStats::default(), 0.0);
-    for i in 0..passes {
+    for i in passes {
         let (samples, estimates, pass_stats) = renderer.run_pass(i);
         let added = Instant::now();
         let sums = estimates.iter().map(|e| (e.radiance, e.laplacian));

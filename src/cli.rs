@@ -186,6 +186,10 @@ pub struct BenchArgs {
     /// Passes per measurement.
     #[arg(long, default_value_t = 8, value_parser = at_least_one)]
     passes: u64,
+    /// Index of the first pass measured: later passes gather with smaller radii, as most of a
+    /// long render does (the radius squared falls as pass^(-1/3)).
+    #[arg(long, value_name = "I", default_value_t = 0)]
+    first_pass: u64,
     /// Photon paths per pass (default: one per pixel).
     #[arg(long, value_name = "N", value_parser = at_least_one)]
     photons: Option<u64>,
@@ -381,7 +385,13 @@ pub fn run(cli: Cli) -> Result<(), String> {
             match args.frames {
                 Some(frames) => crate::bench::run_frames(&scene, frames.0, args.passes),
                 None => {
-                    crate::bench::run(&scene, args.resolution, args.passes, args.photons.map(|n| n as usize))
+                    let photons = args.photons.map(|n| n as usize);
+                    crate::bench::run(
+                        &scene,
+                        args.resolution,
+                        args.first_pass..args.first_pass + args.passes,
+                        photons,
+                    )
                 }
             }
         }

@@ -65,7 +65,7 @@ struct SobolPrefix {
 impl SobolPrefix {
     fn next(&mut self) -> f32 {
         let d = self.next_dimension;
-        if d % 4 == 0 {
+        if d.is_multiple_of(4) {
             self.four = sobol_burley::sample_4d(self.index, d / 4, self.seed);
         }
         self.next_dimension += 1;
