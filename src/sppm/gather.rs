@@ -37,7 +37,8 @@ impl Kernel {
     }
 
     /// What `photon` adds at `vp` (kernel-weighted reflected flux, and the same with the
-    /// Laplacian), or `None` when it is out of reach or on the other side.
+    /// Laplacian), or `None` when it is out of reach or on the other side; a photon on a surface
+    /// meeting the point's at an edge adds only its edge term, to the second.
     fn weigh(&self, photon: &Photon, vp: &VisiblePoint) -> Option<[f32; 2]> {
         let d2 = photon.p.distance_squared(vp.p);
         if d2 >= self.r2 {
