@@ -1,22 +1,74 @@
-//! Importance sampling of wavelengths toward the visible range.
+//! Importance sampling of wavelengths over the visible range, 360..830 nm.
 //!
-//! The density `p(lambda) = 0.0039398042 / cosh^2(0.0072 (lambda - 538))` on 360..830 nm roughly
-//! follows the sum of the colour-matching functions (Radziszewski et al. 2009, as in pbrt-v4's
-//! `SampleVisibleWavelengths`); its inverse CDF is closed form.
+//! The density is proportional to `(x-bar + 3 y-bar + z-bar) * D65`, mixed with 25% of a uniform
+//! density, tabulated per nanometre (constant within each 1-nm bin) and sampled by inverting its
+//! cumulative sum. Every light's
+//! emission carries the D65 shape (RGB colours are uplifted against it), so a pass's estimate of
+//! the white, and of anything neutral, hardly changes with its wavelength; the colour-matching
+//! functions weight it toward what the eye sees, luminance three times over. On the demo box at
+//! 128x96 after 128 passes (4 seeds) this gave 18% less relative MSE in luminance and 16% less in
+//! R, G and B than the earlier density (Radziszewski et al. 2009's fit to the sum of the
+//! colour-matching functions, without the illuminant); on the diffuse benchmark box (2 seeds),
+//! 17% and 11% less. Without the uniform part the gain was 25% on both, but the bands at the ends
+//! of the range got too few samples (below).
+
+use std::sync::OnceLock;
+
+use super::{cmf, d65};
+
+/// The first and last wavelengths sampled, nm.
+const FIRST_NM: f32 = 360.0;
+const BINS: usize = 470;
+
+/// The share of the density spread evenly over the range, so that every band gets samples: far
+/// red and near ultraviolet matter to `--spectral-bins` and to dispersion, not to the eye. With
+/// 10% and 15% the ten bands of `tests/dispersion.rs` missed their mean by more than 2% after
+/// 4096 passes (at 384 and at 806 nm).
+const UNIFORM: f64 = 0.25;
+
+/// The density per 1-nm bin and its cumulative sum (`BINS + 1` entries, from 0 to 1).
+struct Table {
+    density: Vec<f32>,
+    cumulative: Vec<f32>,
+}
+
+fn table() -> &'static Table {
+    static TABLE: OnceLock<Table> = OnceLock::new();
+    TABLE.get_or_init(|| {
+        let weight = |i: usize| {
+            let lambda_nm = FIRST_NM + i as f32 + 0.5;
+            let c = cmf(lambda_nm);
+            f64::from((c.x + 3.0 * c.y + c.z) * d65(lambda_nm))
+        };
+        let total: f64 = (0..BINS).map(weight).sum();
+        let density: Vec<f64> =
+            (0..BINS).map(|i| (1.0 - UNIFORM) * weight(i) / total + UNIFORM / BINS as f64).collect();
+        let mut cumulative = vec![0.0f64];
+        for d in &density {
+            cumulative.push(cumulative.last().unwrap() + d);
+        }
+        Table {
+            density: density.iter().map(|&d| d as f32).collect(),
+            cumulative: cumulative.iter().map(|&c| c as f32).collect(),
+        }
+    })
+}
 
 /// The wavelength for a uniform number `u` in [0, 1), with its density per nanometre.
 pub fn sample_visible_wavelength(u: f32) -> (f32, f32) {
-    let lambda_nm = 538.0 - 138.888_89 * (0.856_910_6 - 1.827_502 * u).atanh();
-    let lambda_nm = lambda_nm.clamp(360.0, 830.0);
-    (lambda_nm, visible_wavelength_pdf(lambda_nm))
+    let Table { density, cumulative } = table();
+    let bin = cumulative.partition_point(|&c| c <= u).clamp(1, BINS) - 1;
+    let within = ((u - cumulative[bin]) / density[bin]).clamp(0.0, 1.0 - f32::EPSILON);
+    (FIRST_NM + bin as f32 + within, density[bin])
 }
 
 /// The density of [`sample_visible_wavelength`] at `lambda_nm`.
 pub fn visible_wavelength_pdf(lambda_nm: f32) -> f32 {
-    if !(360.0..=830.0).contains(&lambda_nm) {
+    let offset = lambda_nm - FIRST_NM;
+    if !(0.0..BINS as f32).contains(&offset) {
         return 0.0;
     }
-    0.003_939_804_2 / (0.0072 * (lambda_nm - 538.0)).cosh().powi(2)
+    table().density[offset as usize]
 }
 
 #[cfg(test)]
@@ -27,11 +79,23 @@ mod tests {
     fn density_integrates_to_one_and_matches_samples() {
         let integral: f32 = (0..47000).map(|i| visible_wavelength_pdf(360.0 + i as f32 * 0.01) * 0.01).sum();
         assert!((integral - 1.0).abs() < 2e-3, "{integral}");
-        // The fraction of uniform u below 0.5 lands below the median of p.
-        let (median, _) = sample_visible_wavelength(0.5);
-        let below: f32 = (0..((median - 360.0) * 100.0) as usize)
-            .map(|i| visible_wavelength_pdf(360.0 + i as f32 * 0.01) * 0.01)
-            .sum();
-        assert!((below - 0.5).abs() < 2e-3, "{below}");
+        for u in [0.0, 0.1, 0.5, 0.9, 0.999_999] {
+            let (lambda_nm, pdf) = sample_visible_wavelength(u);
+            assert!((360.0..830.0).contains(&lambda_nm), "{u}: {lambda_nm}");
+            assert_eq!(pdf, visible_wavelength_pdf(lambda_nm), "{u}: {lambda_nm}");
+            // The fraction of the density below the sample is u.
+            let below: f32 = (0..((lambda_nm - 360.0) * 100.0) as usize)
+                .map(|i| visible_wavelength_pdf(360.0 + i as f32 * 0.01) * 0.01)
+                .sum();
+            assert!((below - u).abs() < 2e-3, "{u}: {below}");
+        }
+        // The most likely wavelengths are where the eye is most sensitive; every nanometre keeps
+        // at least its share of the uniform part.
+        let densest = (360..830).max_by(|&a, &b| {
+            visible_wavelength_pdf(a as f32 + 0.5).total_cmp(&visible_wavelength_pdf(b as f32 + 0.5))
+        });
+        assert!((530..600).contains(&densest.unwrap()), "{densest:?}");
+        let floor = (UNIFORM / BINS as f64) as f32;
+        assert!((360..830).all(|l| visible_wavelength_pdf(l as f32 + 0.5) >= floor * 0.999));
     }
 }
