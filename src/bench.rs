@@ -140,7 +140,7 @@ fn time_passes(renderer: &Renderer, passes: std::ops::Range<u64>) -> (PassStats,
         let (samples, estimates, pass_stats) = renderer.run_pass(i);
         let added = Instant::now();
         let sums = estimates.iter().map(|e| (e.radiance, e.laplacian));
-        film.add_pass(samples.lambda_nm, samples.lambda_pdf, samples.radius, sums);
+        film.add_pass(&samples.wavelengths, samples.radius, sums);
         accumulation_s += added.elapsed().as_secs_f64();
         stats = stats + pass_stats;
     }

@@ -18,7 +18,8 @@ use exr::prelude::*;
 use glam::DVec3;
 
 use crate::spectrum::{
-    cmf, d65, d65_xyz, linear_rec709_to_xyz, xyz_to_linear_rec709, LAMBDA_MAX_NM, LAMBDA_MIN_NM,
+    cmf, d65, d65_xyz, linear_rec709_to_xyz, xyz_to_linear_rec709, SampledSpectrum, Wavelengths,
+    LAMBDA_MAX_NM, LAMBDA_MIN_NM, LANES,
 };
 
 /// How the film weighs each pass's wavelength.
@@ -192,30 +193,39 @@ impl Film {
         Some(())
     }
 
-    /// Adds one pass of gather radius `radius`: `radiance[i]` and `laplacian[i]` at `lambda_nm`,
-    /// sampled with density `pdf`.
+    /// Adds one pass of gather radius `radius`: `radiance[i]` and `laplacian[i]` at the
+    /// wavelengths `lambda` (each lane sampled with its density).
     pub fn add_pass(
         &mut self,
-        lambda_nm: f32,
-        pdf: f32,
+        lambda: &Wavelengths,
         radius: f32,
-        estimates: impl Iterator<Item = (f32, f32)>,
+        estimates: impl Iterator<Item = (SampledSpectrum, SampledSpectrum)>,
     ) {
         let radius2 = f64::from(radius) * f64::from(radius);
-        let weight = match self.mode {
-            FilmMode::Spectral => (cmf(lambda_nm) / pdf).as_dvec3(),
-            FilmMode::Monochromatic { .. } => display_xyz(lambda_nm) / f64::from(d65(lambda_nm)),
+        // Each lane's XYZ per unit radiance: the estimate is the mean over lanes.
+        let weights: [DVec3; LANES] = std::array::from_fn(|k| {
+            let (lambda_nm, pdf) = (lambda.nm[k], lambda.pdf[k]);
+            let weight = match self.mode {
+                FilmMode::Spectral => (cmf(lambda_nm) / pdf).as_dvec3(),
+                FilmMode::Monochromatic { .. } => display_xyz(lambda_nm) / f64::from(d65(lambda_nm)),
+            };
+            weight / LANES as f64
+        });
+        let lanes_xyz = |values: SampledSpectrum| -> DVec3 {
+            weights.iter().zip(values.to_array()).map(|(w, v)| *w * f64::from(v)).sum()
         };
+        let white_xyz = lanes_xyz(lambda.d65);
         let white_y = match self.mode {
-            FilmMode::Spectral => weight.y * f64::from(d65(lambda_nm)),
+            FilmMode::Spectral => white_xyz.y,
             FilmMode::Monochromatic { .. } => 1.0,
         };
         self.white_y += white_y;
         self.white_y_squared += white_y * white_y;
-        self.white_xyz += weight * f64::from(d65(lambda_nm));
+        self.white_xyz += white_xyz;
         self.passes += 1;
-        let band = (self.bins.count > 0).then(|| self.bins.band(lambda_nm));
-        let band_weight = 1.0 / (f64::from(pdf) * self.bins.width_nm());
+        let bands = (self.bins.count > 0).then(|| lambda.nm.to_array().map(|l| self.bins.band(l)));
+        let band_weights =
+            lambda.pdf.to_array().map(|p| 1.0 / (f64::from(p) * self.bins.width_nm() * LANES as f64));
         for (i, (sums, (radiance, laplacian))) in self.pixels.iter_mut().zip(estimates).enumerate() {
             // A non-finite estimate would poison the pixel's sums for good: count it as zero and
             // report it, so the image stays usable and the problem is not silent.
@@ -223,16 +233,19 @@ impl Film {
                 (radiance, laplacian)
             } else {
                 self.non_finite_estimates += 1;
-                (0.0, 0.0)
+                (SampledSpectrum::ZERO, SampledSpectrum::ZERO)
             };
-            let xyz = weight * f64::from(radiance);
+            let xyz = lanes_xyz(radiance);
             sums.xyz += xyz;
             sums.y_squared += xyz.y * xyz.y;
             sums.y_white += xyz.y * white_y;
-            sums.laplacian_y += weight.y * radius2 * f64::from(laplacian);
+            sums.laplacian_y += radius2 * lanes_xyz(laplacian).y;
             sums.passes += 1;
-            if let Some(band) = band {
-                self.bins.sums[i * self.bins.count + band] += f64::from(radiance) * band_weight;
+            if let Some(bands) = bands {
+                let pixel_bins = &mut self.bins.sums[i * self.bins.count..][..self.bins.count];
+                for k in 0..LANES {
+                    pixel_bins[bands[k]] += f64::from(radiance[k]) * band_weights[k];
+                }
             }
         }
     }
@@ -303,14 +316,13 @@ impl Film {
 mod tests {
     use super::*;
     use crate::sampling::pass_sample;
-    use crate::spectrum::sample_visible_wavelength;
-
     /// Adds `passes` passes in which every pixel sees `radiance(lambda)`.
     fn film_of(passes: u64, radiance: impl Fn(f32) -> f32) -> Film {
         let mut film = Film::new(2, 1, FilmMode::Spectral, 0);
         for i in 0..passes {
-            let (lambda, pdf) = sample_visible_wavelength(pass_sample(5, i));
-            film.add_pass(lambda, pdf, 0.1, [(radiance(lambda), 0.0), (radiance(lambda), 0.0)].into_iter());
+            let lambda = Wavelengths::sampled(pass_sample(5, i));
+            let pixel = (lambda.map(&radiance), SampledSpectrum::ZERO);
+            film.add_pass(&lambda, 0.1, [pixel, pixel].into_iter());
         }
         film
     }
@@ -327,7 +339,12 @@ mod tests {
     fn one_wavelength_shows_white_as_luminance_one_in_its_own_colour() {
         for lambda in [450.0, 550.0, 650.0] {
             let mut film = Film::new(1, 1, FilmMode::Monochromatic { lambda_nm: lambda }, 0);
-            film.add_pass(lambda, 1.0, 0.1, [(0.5 * d65(lambda), 0.0)].into_iter());
+            let white = SampledSpectrum::splat(0.5 * d65(lambda));
+            film.add_pass(
+                &Wavelengths::single(lambda, 1.0),
+                0.1,
+                [(white, SampledSpectrum::ZERO)].into_iter(),
+            );
             let rgb = film.rgb()[0];
             let luminance = 0.2126 * rgb.x + 0.7152 * rgb.y + 0.0722 * rgb.z;
             assert!((luminance - 0.5).abs() < 1e-3 && rgb.min_element() >= -1e-9, "{lambda}: {rgb}");
@@ -344,9 +361,9 @@ mod tests {
     #[test]
     fn spectral_bins_average_the_spectral_radiance_of_their_band() {
         let mut film = Film::new(1, 1, FilmMode::Spectral, 47);
-        for i in 0..40_000 {
-            let (lambda, pdf) = sample_visible_wavelength(pass_sample(9, i));
-            film.add_pass(lambda, pdf, 0.1, [(2.0, 0.0)].into_iter());
+        for i in 0..10_000 {
+            let lambda = Wavelengths::sampled(pass_sample(9, i));
+            film.add_pass(&lambda, 0.1, [(SampledSpectrum::splat(2.0), SampledSpectrum::ZERO)].into_iter());
         }
         let bands: Vec<f64> = film.bins.sums.iter().map(|s| s / film.passes as f64).collect();
         // A flat spectrum of 2 per nm: every 10 nm band averages 2.

@@ -13,6 +13,7 @@ use std::time::Instant;
 use crate::accel::{Accel, Bvh};
 use crate::error::{summarize, ErrorSummary, PixelError};
 use crate::film::{Film, FilmMode};
+use crate::materials::Material;
 use crate::monitor::{ErrorSettings, Monitor, StopReason};
 use crate::partial;
 use crate::progress::Progress;
@@ -315,6 +316,7 @@ impl Shot {
             initial_radius: settings.radius.unwrap_or_else(|| default_radius(&first, photons_per_pass)),
             seed: settings.seed,
             fixed_wavelength_nm: settings.wavelength_nm,
+            dispersive: first.materials.iter().any(Material::is_dispersive),
         };
         let still =
             (!prepared.has_motion()).then(|| (first, Accel::new(Arc::clone(&fixed_bvh), Bvh::empty())));
@@ -576,7 +578,7 @@ fn add_pass(
     stats: PassStats,
 ) {
     let sums = estimates.iter().map(|e| (e.radiance, e.laplacian));
-    frame.film.add_pass(samples.lambda_nm, samples.lambda_pdf, samples.radius, sums);
+    frame.film.add_pass(&samples.wavelengths, samples.radius, sums);
     frame.stats = frame.stats + stats;
 }
 

@@ -4,11 +4,12 @@
 use serde_json::{json, Value};
 
 use crate::frames::{load_description, RenderSettings, Shot};
+use crate::materials::Material;
 
 /// The JSON report for `settings.scene` over `settings.frames`.
 pub fn report(settings: &RenderSettings) -> Result<Value, String> {
     let description = load_description(settings)?;
-    let dispersion = description.materials.iter().any(|m| m.transmission > 0.0 && m.ior.is_dispersive());
+    let dispersion = description.materials.iter().any(Material::is_dispersive);
     let fps = description.fps;
     let shot = Shot::new(settings, description)?;
     let prepared = shot.prepared();

@@ -21,7 +21,7 @@ use crate::geometry::{offset_origin, one_minus_cos_between, Cone};
 use crate::sampling::{
     basis, square_to_cone, square_to_cosine_hemisphere, square_to_disc, square_to_sphere, square_to_triangle,
 };
-use crate::spectrum::{d65, RgbSpectrum};
+use crate::spectrum::{RgbSpectrum, SampledSpectrum, Wavelengths};
 
 /// The scene's bounding sphere, where distant lights start their photons.
 #[derive(Clone, Copy, Debug, Default)]
@@ -87,7 +87,7 @@ pub struct LightSample {
     /// Distance to the light (infinite for distant lights).
     pub distance: f32,
     /// Incident radiance over the density of `wi` (cosine at the receiver not included).
-    pub radiance_over_pdf: f32,
+    pub radiance_over_pdf: SampledSpectrum,
     /// The density of `wi` per solid angle; zero for delta lights (a point, a spot, a delta sun).
     pub pdf: f32,
 }
@@ -100,12 +100,12 @@ pub struct EmittedPhoton {
     /// Unit direction of travel.
     pub direction: Vec3,
     /// Its flux over the density of its origin and direction, W.
-    pub flux: f32,
+    pub flux: SampledSpectrum,
 }
 
-/// The spectral value of a light's scalar shape at `lambda_nm`, D65 included.
-fn spectral(shape: &RgbSpectrum, lambda_nm: f32) -> f32 {
-    shape.eval(lambda_nm) * d65(lambda_nm)
+/// The spectral value of a light's shape at the wavelengths `lambda`, D65 included.
+fn spectral(shape: &RgbSpectrum, lambda: &Wavelengths) -> SampledSpectrum {
+    shape.eval_lanes(lambda.nm) * lambda.d65
 }
 
 /// glTF's spot falloff: the square of a linear ramp in cosine between the outer and inner cone,
@@ -169,24 +169,24 @@ impl Light {
     }
 
     /// Samples light arriving at `p` (for next-event estimation); `None` when none arrives.
-    pub fn sample_incident(&self, p: Vec3, u: Vec2, lambda_nm: f32) -> Option<LightSample> {
+    pub fn sample_incident(&self, p: Vec3, u: Vec2, lambda: &Wavelengths) -> Option<LightSample> {
         match self {
             Light::Point { position, intensity } => {
                 let (wi, distance) = direction_and_distance(p, *position)?;
-                let radiance_over_pdf = spectral(intensity, lambda_nm) / (distance * distance);
+                let radiance_over_pdf = spectral(intensity, lambda) / (distance * distance);
                 Some(LightSample { wi, distance, radiance_over_pdf, pdf: 0.0 })
             }
             Light::Spot { position, axis, intensity, inner, outer } => {
                 let (wi, distance) = direction_and_distance(p, *position)?;
                 let falloff = spot_falloff(one_minus_cos_between(-wi, *axis), *inner, *outer);
-                let radiance_over_pdf = spectral(intensity, lambda_nm) * falloff / (distance * distance);
+                let radiance_over_pdf = spectral(intensity, lambda) * falloff / (distance * distance);
                 (falloff > 0.0).then_some(LightSample { wi, distance, radiance_over_pdf, pdf: 0.0 })
             }
             Light::Sun { direction, irradiance, disc, .. } => {
                 let (t, b) = basis(-*direction);
                 let local = square_to_cone(u, disc.one_minus_cos);
                 let wi = (t * local.x + b * local.y - *direction * local.z).normalize();
-                let radiance_over_pdf = spectral(irradiance, lambda_nm);
+                let radiance_over_pdf = spectral(irradiance, lambda);
                 let pdf = if disc.is_delta() { 0.0 } else { 1.0 / disc.solid_angle() };
                 Some(LightSample { wi, distance: f32::INFINITY, radiance_over_pdf, pdf })
             }
@@ -197,12 +197,12 @@ impl Light {
                 if pdf <= 0.0 {
                     return None;
                 }
-                let radiance_over_pdf = spectral(radiance, lambda_nm) / pdf;
+                let radiance_over_pdf = spectral(radiance, lambda) / pdf;
                 Some(LightSample { wi, distance, radiance_over_pdf, pdf })
             }
             Light::World(world) => {
                 let (wi, pdf) = world.sample_direction(u)?;
-                let radiance_over_pdf = world.radiance(wi, lambda_nm) / pdf;
+                let radiance_over_pdf = world.radiance(wi, lambda) / pdf;
                 Some(LightSample { wi, distance: f32::INFINITY, radiance_over_pdf, pdf })
             }
         }
@@ -231,25 +231,30 @@ impl Light {
 
     /// Radiance that a ray of direction `dir` leaving the scene receives from this light
     /// (distant lights with a solid angle: the world, a sun with an angular diameter).
-    pub fn escaped_radiance(&self, dir: Vec3, lambda_nm: f32) -> f32 {
+    pub fn escaped_radiance(&self, dir: Vec3, lambda: &Wavelengths) -> SampledSpectrum {
         match self {
             Light::Sun { direction, irradiance, disc, .. }
                 if !disc.is_delta() && disc.contains(-*direction, dir) =>
             {
-                spectral(irradiance, lambda_nm) / disc.solid_angle()
+                spectral(irradiance, lambda) / disc.solid_angle()
             }
-            Light::World(world) => world.radiance(dir, lambda_nm),
-            _ => 0.0,
+            Light::World(world) => world.radiance(dir, lambda),
+            _ => SampledSpectrum::ZERO,
         }
     }
 
-    /// Samples a photon leaving the light at `lambda_nm`.
-    pub fn emit_photon(&self, u_position: Vec2, u_direction: Vec2, lambda_nm: f32) -> Option<EmittedPhoton> {
+    /// Samples a photon leaving the light, carrying the wavelengths `lambda`.
+    pub fn emit_photon(
+        &self,
+        u_position: Vec2,
+        u_direction: Vec2,
+        lambda: &Wavelengths,
+    ) -> Option<EmittedPhoton> {
         let photon = match self {
             Light::Point { position, intensity } => EmittedPhoton {
                 origin: *position,
                 direction: square_to_sphere(u_direction),
-                flux: spectral(intensity, lambda_nm) * 4.0 * PI,
+                flux: spectral(intensity, lambda) * 4.0 * PI,
             },
             Light::Spot { position, axis, intensity, inner, outer } => {
                 let (t, b) = basis(*axis);
@@ -259,7 +264,7 @@ impl Light {
                 EmittedPhoton {
                     origin: *position,
                     direction: (t * local.x + b * local.y + *axis * local.z).normalize(),
-                    flux: spectral(intensity, lambda_nm) * falloff * solid_angle,
+                    flux: spectral(intensity, lambda) * falloff * solid_angle,
                 }
             }
             Light::Sun { direction, irradiance, disc, sphere } => {
@@ -269,7 +274,7 @@ impl Light {
                 EmittedPhoton {
                     origin: disc_origin(sphere, direction, u_position),
                     direction,
-                    flux: spectral(irradiance, lambda_nm) * PI * sphere.radius * sphere.radius,
+                    flux: spectral(irradiance, lambda) * PI * sphere.radius * sphere.radius,
                 }
             }
             Light::Triangle { corners, radiance, both_sides } => {
@@ -296,7 +301,7 @@ impl Light {
                         corners_scale(corners),
                     ),
                     direction,
-                    flux: spectral(radiance, lambda_nm) * PI * triangle_area(corners) * sides,
+                    flux: spectral(radiance, lambda) * PI * triangle_area(corners) * sides,
                 }
             }
             Light::World(world) => {
@@ -306,11 +311,11 @@ impl Light {
                 EmittedPhoton {
                     origin: disc_origin(&world.sphere, -wi, u_position),
                     direction: -wi,
-                    flux: world.radiance(wi, lambda_nm) * PI * r * r / pdf,
+                    flux: world.radiance(wi, lambda) * PI * r * r / pdf,
                 }
             }
         };
-        (photon.flux > 0.0 && photon.flux.is_finite()).then_some(photon)
+        (photon.flux.max_element() > 0.0 && photon.flux.is_finite()).then_some(photon)
     }
 }
 
@@ -348,13 +353,13 @@ mod tests {
         for light in &lights {
             for i in 0..n {
                 let u = Vec2::new((i as f32 + 0.5) / n as f32, ((i * 7919) % n) as f32 / n as f32);
-                if let Some(s) = light.sample_incident(Vec3::ZERO, u, 555.0) {
-                    irradiance += s.radiance_over_pdf * s.wi.z.max(0.0) / n as f32;
+                if let Some(s) = light.sample_incident(Vec3::ZERO, u, &Wavelengths::single(555.0, 1.0)) {
+                    irradiance += s.radiance_over_pdf.x * s.wi.z.max(0.0) / n as f32;
                 }
             }
         }
         let form_factor = 4.0 / PI * (0.5f32.sqrt()).atan() * 0.5f32.sqrt();
-        let expected = PI * form_factor * d65(555.0);
+        let expected = PI * form_factor * crate::spectrum::d65(555.0);
         assert!((irradiance / expected - 1.0).abs() < 0.02, "{irradiance} vs {expected}");
     }
 }

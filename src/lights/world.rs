@@ -9,11 +9,11 @@ use std::f32::consts::PI;
 use std::path::Path;
 use std::sync::Arc;
 
-use glam::{Vec2, Vec3};
+use glam::{Vec2, Vec3, Vec4};
 
 use super::BoundingSphere;
 use crate::sampling::{square_to_sphere, Distribution2D};
-use crate::spectrum::{d65, rgb::IlluminantTable, RgbSpectrum};
+use crate::spectrum::{rgb::IlluminantTable, RgbSpectrum, SampledSpectrum, Wavelengths};
 
 /// The world's light.
 #[derive(Clone, Debug)]
@@ -68,11 +68,11 @@ impl World {
     }
 
     /// Spectral radiance arriving along `-dir`, seen by a ray of direction `dir`.
-    pub fn radiance(&self, dir: Vec3, lambda_nm: f32) -> f32 {
-        let base = self.scale.eval(lambda_nm) * d65(lambda_nm);
+    pub fn radiance(&self, dir: Vec3, lambda: &Wavelengths) -> SampledSpectrum {
+        let base = self.scale.eval_lanes(lambda.nm) * lambda.d65;
         match &self.map {
             None => base,
-            Some(map) => base * map.eval(dir, lambda_nm),
+            Some(map) => base * map.eval(dir, lambda.nm),
         }
     }
 
@@ -133,8 +133,9 @@ impl EnvironmentMap {
         EnvironmentMap { width, height, texels, distribution, rotation, luminance_over_sphere }
     }
 
-    /// The image's value at `lambda_nm` toward `dir`, bilinearly interpolated (wrapping around).
-    fn eval(&self, dir: Vec3, lambda_nm: f32) -> f32 {
+    /// The image's value at four wavelengths (nm) toward `dir`, bilinearly interpolated (wrapping
+    /// around).
+    fn eval(&self, dir: Vec3, lambda_nm: Vec4) -> Vec4 {
         let point = direction_to_image(dir, self.rotation);
         let x = point.x * self.width as f32 - 0.5;
         let y = (point.y * self.height as f32 - 0.5).clamp(0.0, (self.height - 1) as f32);
@@ -143,7 +144,7 @@ impl EnvironmentMap {
         let texel = |dx: i64, dy: usize| {
             let i = (x0 as i64 + dx).rem_euclid(self.width as i64) as usize;
             let j = (y0 as usize + dy).min(self.height - 1);
-            self.texels[j * self.width + i].eval(lambda_nm)
+            self.texels[j * self.width + i].eval_lanes(lambda_nm)
         };
         let top = texel(0, 0) * (1.0 - tx) + texel(1, 0) * tx;
         let bottom = texel(0, 1) * (1.0 - tx) + texel(1, 1) * tx;

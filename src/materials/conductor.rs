@@ -1,10 +1,11 @@
 //! Conductors: a perfect mirror, and GGX microfacet reflection (Walter et al. 2007), both with
 //! Schlick's Fresnel from the base colour (the glTF metallic BRDF).
 
-use glam::{Vec2, Vec3};
+use glam::{Vec2, Vec3, Vec4};
 
 use super::{face_toward, microfacet, BsdfSample};
 use crate::sampling::basis;
+use crate::spectrum::SampledSpectrum;
 
 /// Mirror reflection of `wo` about `n`.
 pub fn reflect(wo: Vec3, n: Vec3) -> Vec3 {
@@ -12,7 +13,7 @@ pub fn reflect(wo: Vec3, n: Vec3) -> Vec3 {
 }
 
 /// The perfect mirror: `wi` is `wo` reflected, weight `F(cos)`.
-pub fn sample_smooth(f0: f32, n: Vec3, wo: Vec3) -> Option<BsdfSample> {
+pub fn sample_smooth(f0: SampledSpectrum, n: Vec3, wo: Vec3) -> Option<BsdfSample> {
     let n = face_toward(n, wo);
     let weight = microfacet::schlick(f0, n.dot(wo));
     Some(BsdfSample { wi: reflect(wo, n), weight, pdf: 0.0, is_delta: true })
@@ -27,10 +28,10 @@ fn to_local(n: Vec3, wo: Vec3, wi: Vec3) -> (Vec3, Vec3, [Vec3; 3]) {
 }
 
 /// GGX reflection `D G F / (4 |wo.n| |wi.n|)`.
-pub fn eval_rough(f0: f32, alpha: f32, n: Vec3, wo: Vec3, wi: Vec3) -> f32 {
+pub fn eval_rough(f0: SampledSpectrum, alpha: f32, n: Vec3, wo: Vec3, wi: Vec3) -> SampledSpectrum {
     let (wo, wi, _) = to_local(n, wo, wi);
     if wo.z <= 0.0 || wi.z <= 0.0 {
-        return 0.0;
+        return Vec4::ZERO;
     }
     let h = (wo + wi).normalize();
     let d = microfacet::distribution(alpha, h);
@@ -50,7 +51,7 @@ pub fn pdf_rough(alpha: f32, n: Vec3, wo: Vec3, wi: Vec3) -> f32 {
 }
 
 /// Visible-normal sampling: the weight is `F G2 / G1(wo)`.
-pub fn sample_rough(f0: f32, alpha: f32, n: Vec3, wo: Vec3, u: Vec2) -> Option<BsdfSample> {
+pub fn sample_rough(f0: SampledSpectrum, alpha: f32, n: Vec3, wo: Vec3, u: Vec2) -> Option<BsdfSample> {
     let (wo_local, _, [t, b, n]) = to_local(n, wo, wo);
     if wo_local.z <= 0.0 {
         return None;

@@ -3,7 +3,7 @@
 //! that radiance (camera paths) is scaled by 1 / eta^2 on refraction while importance (photons)
 //! is not: the BTDF is not symmetric (Veach 1997, 5.2; pbrt-v4 section 9.5.2).
 
-use glam::Vec3;
+use glam::{Vec3, Vec4};
 
 use super::{conductor::reflect, face_toward, BsdfSample, ShadingFrame, Transport};
 
@@ -31,7 +31,7 @@ pub fn sample(ior: f32, frame: ShadingFrame, wo: Vec3, u: f32, mode: Transport) 
     let cos_i = n.dot(wo).min(1.0);
     let f = fresnel_dielectric(cos_i, eta);
     if u < f {
-        return Some(BsdfSample { wi: reflect(wo, n), weight: 1.0, pdf: 0.0, is_delta: true });
+        return Some(BsdfSample { wi: reflect(wo, n), weight: Vec4::ONE, pdf: 0.0, is_delta: true });
     }
     let sin2_t = (1.0 - cos_i * cos_i) / (eta * eta);
     let cos_t = (1.0 - sin2_t).max(0.0).sqrt();
@@ -40,7 +40,7 @@ pub fn sample(ior: f32, frame: ShadingFrame, wo: Vec3, u: f32, mode: Transport) 
         Transport::Radiance => 1.0 / (eta * eta),
         Transport::Importance => 1.0,
     };
-    Some(BsdfSample { wi, weight, pdf: 0.0, is_delta: true })
+    Some(BsdfSample { wi, weight: Vec4::splat(weight), pdf: 0.0, is_delta: true })
 }
 
 /// Reflects or transmits `wo` at a thin dielectric wall of index `ior`: the light reflected by its
@@ -52,7 +52,7 @@ pub fn sample_thin(ior: f32, frame: ShadingFrame, wo: Vec3, u: f32) -> Option<Bs
     let r = fresnel_dielectric(n.dot(wo).min(1.0), ior);
     let reflected = if r < 1.0 { r + (1.0 - r) * (1.0 - r) * r / (1.0 - r * r) } else { 1.0 };
     let wi = if u < reflected { reflect(wo, n) } else { -wo };
-    Some(BsdfSample { wi, weight: 1.0, pdf: 0.0, is_delta: true })
+    Some(BsdfSample { wi, weight: Vec4::ONE, pdf: 0.0, is_delta: true })
 }
 
 #[cfg(test)]

@@ -1,17 +1,18 @@
 //! Lambertian reflection: `f = albedo / pi` on the side of `wo`.
 
-use glam::{Vec2, Vec3};
+use glam::{Vec2, Vec3, Vec4};
 use std::f32::consts::FRAC_1_PI;
 
 use super::{face_toward, BsdfSample};
 use crate::sampling::{basis, square_to_cosine_hemisphere};
+use crate::spectrum::SampledSpectrum;
 
 /// `albedo / pi` when `wo` and `wi` are on the same side of `n`, else zero.
-pub fn eval(albedo: f32, n: Vec3, wo: Vec3, wi: Vec3) -> f32 {
+pub fn eval(albedo: SampledSpectrum, n: Vec3, wo: Vec3, wi: Vec3) -> SampledSpectrum {
     if n.dot(wo) * n.dot(wi) > 0.0 {
         albedo * FRAC_1_PI
     } else {
-        0.0
+        Vec4::ZERO
     }
 }
 
@@ -25,7 +26,7 @@ pub fn pdf(n: Vec3, wo: Vec3, wi: Vec3) -> f32 {
 }
 
 /// Cosine-weighted reflection on the side of `wo`: the weight is the albedo.
-pub fn sample(albedo: f32, n: Vec3, wo: Vec3, u: Vec2) -> Option<BsdfSample> {
+pub fn sample(albedo: SampledSpectrum, n: Vec3, wo: Vec3, u: Vec2) -> Option<BsdfSample> {
     let n = face_toward(n, wo);
     let (t, b) = basis(n);
     let local = square_to_cosine_hemisphere(u);

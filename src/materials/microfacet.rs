@@ -3,7 +3,9 @@
 //!
 //! All functions work in a local frame whose +z is the shading normal.
 
-use glam::{Vec2, Vec3};
+use glam::{Vec2, Vec3, Vec4};
+
+use crate::spectrum::SampledSpectrum;
 use std::f32::consts::PI;
 
 /// The normal distribution D(h).
@@ -44,6 +46,6 @@ pub fn sample_visible_normal(alpha: f32, wo: Vec3, u: Vec2) -> Vec3 {
 }
 
 /// Schlick's Fresnel approximation.
-pub fn schlick(f0: f32, cos_theta: f32) -> f32 {
-    f0 + (1.0 - f0) * (1.0 - cos_theta.clamp(0.0, 1.0)).powi(5)
+pub fn schlick(f0: SampledSpectrum, cos_theta: f32) -> SampledSpectrum {
+    f0 + (Vec4::ONE - f0) * (1.0 - cos_theta.clamp(0.0, 1.0)).powi(5)
 }

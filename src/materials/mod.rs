@@ -1,7 +1,8 @@
 //! Materials (what the glTF file says) and BSDFs (a material resolved at one wavelength).
 //!
 //! A [`Material`] holds the glTF metallic-roughness parameters with spectra; [`Material::bsdf`]
-//! resolves it at the pass wavelength into a closed [`Bsdf`] with scalar parameters. Where the
+//! resolves it at the pass's wavelengths into a closed [`Bsdf`] with a value per wavelength
+//! (directions follow the hero wavelength, the only one in a dispersive scene). Where the
 //! glTF material mixes lobes (transmission or metallic between 0 and 1), one lobe is chosen by a
 //! random number with its weight as probability, which is unbiased.
 //!
@@ -15,9 +16,9 @@ mod texture;
 
 use std::sync::Arc;
 
-use glam::{Vec2, Vec3};
+use glam::{Vec2, Vec3, Vec4};
 
-use crate::spectrum::{d65, Dispersion, RgbSpectrum};
+use crate::spectrum::{Dispersion, RgbSpectrum, SampledSpectrum, Wavelengths};
 
 pub use dielectric::fresnel_dielectric;
 pub use texture::Texture;
@@ -75,22 +76,28 @@ impl Material {
         }
     }
 
-    /// The base colour's reflectance at texture coordinate `uv` and `lambda_nm`.
-    pub fn reflectance(&self, uv: Vec2, lambda_nm: f32) -> f32 {
+    /// The base colour's reflectance at texture coordinate `uv` and the wavelengths `lambda`.
+    pub fn reflectance(&self, uv: Vec2, lambda: &Wavelengths) -> SampledSpectrum {
         match &self.base_colour {
-            BaseColour::Constant(spectrum) => spectrum.eval(lambda_nm),
-            BaseColour::Texture(texture) => texture.eval(uv, lambda_nm),
+            BaseColour::Constant(spectrum) => spectrum.eval_lanes(lambda.nm),
+            BaseColour::Texture(texture) => texture.eval(uv, lambda.nm),
         }
     }
 
-    /// The emitted spectral radiance at `lambda_nm` leaving toward `wo` from a face of normal `ng`.
-    pub fn emitted(&self, lambda_nm: f32, ng: Vec3, wo: Vec3) -> f32 {
+    /// The emitted spectral radiance at `lambda` leaving toward `wo` from a face of normal `ng`.
+    pub fn emitted(&self, lambda: &Wavelengths, ng: Vec3, wo: Vec3) -> SampledSpectrum {
         match &self.emission {
             Some(spectrum) if self.emits_both_sides || ng.dot(wo) > 0.0 => {
-                spectrum.eval(lambda_nm) * d65(lambda_nm)
+                spectrum.eval_lanes(lambda.nm) * lambda.d65
             }
-            _ => 0.0,
+            _ => Vec4::ZERO,
         }
+    }
+
+    /// Whether it refracts each wavelength its own way (a transmissive material whose index
+    /// depends on wavelength).
+    pub fn is_dispersive(&self) -> bool {
+        self.transmission > 0.0 && self.ior.is_dispersive()
     }
 
     /// Whether light passes through unchanged (a thin fully transmissive wall of index 1, as area
@@ -99,14 +106,14 @@ impl Material {
         self.thin && self.transmission >= 1.0 && self.ior == Dispersion::Constant(1.0)
     }
 
-    /// The BSDF at texture coordinate `uv` and `lambda_nm`, with `u_lobe` a uniform number that
-    /// picks a lobe where the material mixes several.
-    pub fn bsdf(&self, uv: Vec2, lambda_nm: f32, u_lobe: f32) -> Bsdf {
+    /// The BSDF at texture coordinate `uv` and the wavelengths `lambda`, with `u_lobe` a uniform
+    /// number that picks a lobe where the material mixes several.
+    pub fn bsdf(&self, uv: Vec2, lambda: &Wavelengths, u_lobe: f32) -> Bsdf {
         if u_lobe < self.transmission {
-            let ior = self.ior.index(lambda_nm);
+            let ior = self.ior.index(lambda.hero());
             return if self.thin { Bsdf::ThinDielectric { ior } } else { Bsdf::Dielectric { ior } };
         }
-        let reflectance = self.reflectance(uv, lambda_nm);
+        let reflectance = self.reflectance(uv, lambda);
         let u_lobe = (u_lobe - self.transmission) / (1.0 - self.transmission);
         let alpha = self.roughness * self.roughness;
         if u_lobe < self.metallic {
@@ -115,30 +122,30 @@ impl Material {
             }
             return Bsdf::RoughConductor { f0: reflectance, alpha };
         }
-        if self.emission.is_some() && reflectance == 0.0 {
+        if self.emission.is_some() && reflectance == Vec4::ZERO {
             return Bsdf::Black;
         }
         Bsdf::Diffuse { albedo: reflectance }
     }
 }
 
-/// A BSDF at one wavelength.
+/// A BSDF at a path's wavelengths: reflectances per wavelength, indices at the hero's.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub enum Bsdf {
     /// Lambertian reflection of albedo in [0, 1].
     Diffuse {
-        /// Albedo at the pass wavelength.
-        albedo: f32,
+        /// Albedo at each wavelength.
+        albedo: SampledSpectrum,
     },
     /// A perfect mirror with Schlick's Fresnel from `f0`.
     Conductor {
         /// Normal-incidence reflectance.
-        f0: f32,
+        f0: SampledSpectrum,
     },
     /// GGX microfacet reflection with Schlick's Fresnel.
     RoughConductor {
         /// Normal-incidence reflectance.
-        f0: f32,
+        f0: SampledSpectrum,
         /// GGX alpha (roughness squared).
         alpha: f32,
     },
@@ -172,7 +179,7 @@ pub struct BsdfSample {
     /// The new direction, away from the surface.
     pub wi: Vec3,
     /// `f * |cos| / pdf`: the factor the path throughput is multiplied by.
-    pub weight: f32,
+    pub weight: SampledSpectrum,
     /// The density of `wi` per solid angle (meaningless for delta lobes).
     pub pdf: f32,
     /// Whether the sample came from a delta lobe.
@@ -186,11 +193,11 @@ impl Bsdf {
     }
 
     /// The BSDF value `f(wo, wi)` (zero for delta lobes) with shading normal `n`.
-    pub fn eval(&self, n: Vec3, wo: Vec3, wi: Vec3) -> f32 {
+    pub fn eval(&self, n: Vec3, wo: Vec3, wi: Vec3) -> SampledSpectrum {
         match *self {
             Bsdf::Diffuse { albedo } => diffuse::eval(albedo, n, wo, wi),
             Bsdf::RoughConductor { f0, alpha } => conductor::eval_rough(f0, alpha, n, wo, wi),
-            _ => 0.0,
+            _ => Vec4::ZERO,
         }
     }
 
@@ -246,6 +253,7 @@ pub fn face_toward(n: Vec3, w: Vec3) -> Vec3 {
 mod tests {
     use super::*;
     use crate::sampling::{square_to_sphere, stream, Stream};
+    use glam::DVec4;
 
     const FRAME: ShadingFrame = ShadingFrame { n: Vec3::Z, ng: Vec3::Z };
 
@@ -254,54 +262,65 @@ mod tests {
     fn check_sampling_against_eval(bsdf: Bsdf, wo: Vec3) {
         let mut rng = stream(3, Stream::Eye, 0, 0);
         let n = 200_000;
-        let mut sampled = 0.0f64;
+        let mut sampled = DVec4::ZERO;
         for _ in 0..n {
             let Some(s) = bsdf.sample(FRAME, wo, rng.next_2d(), rng.next_1d(), Transport::Radiance) else {
                 continue;
             };
             let (f, pdf) = (bsdf.eval(Vec3::Z, wo, s.wi), bsdf.pdf(Vec3::Z, wo, s.wi));
             assert!((s.pdf / pdf - 1.0).abs() < 1e-3, "{bsdf:?}: pdf {} vs {pdf}", s.pdf);
-            assert!((s.weight / (f * s.wi.z.abs() / pdf) - 1.0).abs() < 1e-3, "{bsdf:?}: weight");
-            sampled += f64::from(s.weight);
+            let expected = f * s.wi.z.abs() / pdf;
+            assert!((s.weight / expected - Vec4::ONE).abs().max_element() < 1e-3, "{bsdf:?}: weight");
+            sampled += s.weight.as_dvec4();
         }
-        let uniform: f64 = (0..n)
+        let uniform: DVec4 = (0..n)
             .map(|_| {
                 let wi = square_to_sphere(rng.next_2d());
-                f64::from(bsdf.eval(Vec3::Z, wo, wi) * wi.z.abs() * 4.0 * std::f32::consts::PI)
+                (bsdf.eval(Vec3::Z, wo, wi) * wi.z.abs() * 4.0 * std::f32::consts::PI).as_dvec4()
             })
             .sum();
         let (sampled, uniform) = (sampled / n as f64, uniform / n as f64);
-        assert!((sampled - uniform).abs() < 0.02 * uniform.max(0.1), "{bsdf:?}: {sampled} vs {uniform}");
+        let tolerance = 0.02 * uniform.max(DVec4::splat(0.1));
+        assert!((sampled - uniform).abs().cmple(tolerance).all(), "{bsdf:?}: {sampled} vs {uniform}");
     }
 
     #[test]
     fn diffuse_sampling_matches_its_density() {
-        check_sampling_against_eval(Bsdf::Diffuse { albedo: 0.7 }, Vec3::new(0.3, 0.1, 0.9).normalize());
+        check_sampling_against_eval(
+            Bsdf::Diffuse { albedo: Vec4::new(0.7, 0.2, 0.9, 0.5) },
+            Vec3::new(0.3, 0.1, 0.9).normalize(),
+        );
     }
 
     #[test]
     fn ggx_sampling_matches_its_density() {
         for alpha in [0.1, 0.3, 0.8] {
             for wo in [Vec3::new(0.0, 0.0, 1.0), Vec3::new(0.8, 0.1, 0.3).normalize()] {
-                check_sampling_against_eval(Bsdf::RoughConductor { f0: 0.9, alpha }, wo);
+                check_sampling_against_eval(
+                    Bsdf::RoughConductor { f0: Vec4::new(0.9, 0.3, 0.6, 1.0), alpha },
+                    wo,
+                );
             }
         }
     }
 
     #[test]
     fn materials_pick_lobes_by_their_weights() {
+        let at = |lambda_nm: f32| Wavelengths::single(lambda_nm, 1.0);
         let glass = Material { transmission: 1.0, roughness: 0.0, ..Material::default_grey() };
-        assert_eq!(glass.bsdf(Vec2::ZERO, 550.0, 0.5), Bsdf::Dielectric { ior: 1.5 });
+        assert_eq!(glass.bsdf(Vec2::ZERO, &at(550.0), 0.5), Bsdf::Dielectric { ior: 1.5 });
+        assert!(!glass.is_dispersive());
         let flint = Material { ior: Dispersion::glass("SF11").unwrap(), ..glass };
-        let (blue, red) = (flint.bsdf(Vec2::ZERO, 450.0, 0.5), flint.bsdf(Vec2::ZERO, 650.0, 0.5));
+        assert!(flint.is_dispersive());
+        let (blue, red) = (flint.bsdf(Vec2::ZERO, &at(450.0), 0.5), flint.bsdf(Vec2::ZERO, &at(650.0), 0.5));
         assert!(
             matches!((blue, red), (Bsdf::Dielectric { ior: b }, Bsdf::Dielectric { ior: r }) if b > r + 0.02)
         );
         let mirror = Material { metallic: 1.0, roughness: 0.0, ..Material::default_grey() };
-        assert!(matches!(mirror.bsdf(Vec2::ZERO, 550.0, 0.5), Bsdf::Conductor { .. }));
+        assert!(matches!(mirror.bsdf(Vec2::ZERO, &at(550.0), 0.5), Bsdf::Conductor { .. }));
         let rough = Material { metallic: 1.0, roughness: 0.5, ..Material::default_grey() };
-        assert!(matches!(rough.bsdf(Vec2::ZERO, 550.0, 0.5), Bsdf::RoughConductor { alpha: 0.25, .. }));
+        assert!(matches!(rough.bsdf(Vec2::ZERO, &at(550.0), 0.5), Bsdf::RoughConductor { alpha: 0.25, .. }));
         let half = Material { metallic: 0.5, ..Material::default_grey() };
-        assert!(matches!(half.bsdf(Vec2::ZERO, 550.0, 0.7), Bsdf::Diffuse { .. }));
+        assert!(matches!(half.bsdf(Vec2::ZERO, &at(550.0), 0.7), Bsdf::Diffuse { .. }));
     }
 }

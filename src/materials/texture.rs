@@ -6,7 +6,7 @@
 
 use std::collections::HashMap;
 
-use glam::{Vec2, Vec3};
+use glam::{Vec2, Vec3, Vec4};
 
 use crate::spectrum::RgbSpectrum;
 
@@ -45,8 +45,8 @@ impl Texture {
         Texture { width, height, texels }
     }
 
-    /// The reflectance at texture coordinate `uv` and `lambda_nm`.
-    pub fn eval(&self, uv: Vec2, lambda_nm: f32) -> f32 {
+    /// The reflectance at texture coordinate `uv` and four wavelengths, nm.
+    pub fn eval(&self, uv: Vec2, lambda_nm: Vec4) -> Vec4 {
         let x = uv.x * self.width as f32 - 0.5;
         let y = uv.y * self.height as f32 - 0.5;
         let (x0, y0) = (x.floor(), y.floor());
@@ -54,7 +54,7 @@ impl Texture {
         let texel = |dx: i64, dy: i64| {
             let i = (x0 as i64 + dx).rem_euclid(self.width as i64) as usize;
             let j = (y0 as i64 + dy).rem_euclid(self.height as i64) as usize;
-            self.texels[j * self.width + i].eval(lambda_nm)
+            self.texels[j * self.width + i].eval_lanes(lambda_nm)
         };
         let top = texel(0, 0) * (1.0 - tx) + texel(1, 0) * tx;
         let bottom = texel(0, 1) * (1.0 - tx) + texel(1, 1) * tx;

@@ -24,6 +24,7 @@ use crate::accel::Bvh;
 use crate::camera::Camera;
 use crate::lights::{BoundingSphere, Light};
 use crate::materials::{Material, ShadingFrame};
+use crate::spectrum::{SampledSpectrum, Wavelengths};
 
 pub use description::Description;
 pub use pose::{Prepared, TimeRange};
@@ -176,8 +177,8 @@ impl Scene {
     }
 
     /// Radiance that a ray of direction `dir` receives when it leaves the scene.
-    pub fn escaped_radiance(&self, dir: Vec3, lambda_nm: f32) -> f32 {
-        self.distant_lights.iter().map(|&i| self.lights[i].escaped_radiance(dir, lambda_nm)).sum()
+    pub fn escaped_radiance(&self, dir: Vec3, lambda: &Wavelengths) -> SampledSpectrum {
+        self.distant_lights.iter().map(|&i| self.lights[i].escaped_radiance(dir, lambda)).sum()
     }
 
     /// The sphere around every triangle (radius 1 at the origin for an empty scene).

@@ -7,7 +7,7 @@
 //! D65, has the requested linear Rec.709 colour. Light colours (any non-negative RGB) are a
 //! reflectance of `rgb / (2 max)` times `2 max`, times the D65 illuminant.
 
-use glam::{DVec3, Vec3};
+use glam::{DVec3, Vec3, Vec4};
 
 use super::tables::{cmf, d65, table_wavelengths, xyz_to_linear_rec709};
 
@@ -63,12 +63,19 @@ impl RgbSpectrum {
 
     /// The spectrum's value at `lambda_nm`.
     pub fn eval(&self, lambda_nm: f32) -> f32 {
-        let [c0, c1, c2] = self.coefficients.map(f64::from);
+        self.eval_lanes(Vec4::splat(lambda_nm)).x
+    }
+
+    /// The spectrum's value at four wavelengths, nm.
+    pub fn eval_lanes(&self, lambda_nm: Vec4) -> Vec4 {
+        let [c0, c1, c2] = self.coefficients;
         if c2.is_infinite() {
-            return self.scale;
+            return Vec4::splat(self.scale);
         }
-        let x = f64::from((lambda_nm - LAMBDA_MIN_NM) / LAMBDA_RANGE_NM);
-        self.scale * sigmoid((c0 * x + c1) * x + c2) as f32
+        let x = (lambda_nm - Vec4::splat(LAMBDA_MIN_NM)) / LAMBDA_RANGE_NM;
+        let z = (x * c0 + Vec4::splat(c1)) * x + Vec4::splat(c2);
+        let sigmoid = Vec4::splat(0.5) + z / (2.0 * (Vec4::ONE + z * z).map(f32::sqrt));
+        self.scale * sigmoid
     }
 
     /// The luminance Y of the spectrum times D65 (1 for a constant spectrum of 1).

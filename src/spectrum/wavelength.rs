@@ -14,7 +14,60 @@
 
 use std::sync::OnceLock;
 
+use glam::Vec4;
+
 use super::{cmf, d65};
+
+/// A spectral quantity at a path's four wavelengths ([`Wavelengths`]), one per lane.
+pub type SampledSpectrum = Vec4;
+
+/// The wavelengths a path carries.
+pub const LANES: usize = 4;
+
+/// The wavelengths every path of a pass carries, and their densities per nanometre: four lanes
+/// (hero wavelength sampling, Wilkie et al. 2014). The first, the hero, comes from the pass's
+/// uniform number `u`; the others from `u + 1/4`, `u + 1/2` and `u + 3/4` (mod 1) through the same
+/// inverse CDF. Each lane alone is distributed as [`sample_visible_wavelength`] samples, so the
+/// mean over lanes of `L cmf / p` is an unbiased estimate, and the four together cover the
+/// spectrum evenly. Where the index of refraction depends on wavelength the lanes cannot share
+/// a path, and every lane holds the hero ([`Wavelengths::single`]).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Wavelengths {
+    /// The wavelengths, nm.
+    pub nm: Vec4,
+    /// Their densities per nanometre.
+    pub pdf: Vec4,
+    /// The D65 illuminant (luminance 1) at each, which every light's emission carries.
+    pub d65: SampledSpectrum,
+}
+
+impl Wavelengths {
+    /// The hero wavelength for the uniform number `u` and its three rotations.
+    pub fn sampled(u: f32) -> Self {
+        let lanes: [(f32, f32); LANES] =
+            std::array::from_fn(|k| sample_visible_wavelength((u + k as f32 / LANES as f32).fract()));
+        Self::new(Vec4::from_array(lanes.map(|l| l.0)), Vec4::from_array(lanes.map(|l| l.1)))
+    }
+
+    fn new(nm: Vec4, pdf: Vec4) -> Self {
+        Wavelengths { nm, pdf, d65: Vec4::from_array(nm.to_array().map(d65)) }
+    }
+
+    /// One wavelength in every lane.
+    pub fn single(lambda_nm: f32, pdf: f32) -> Self {
+        Self::new(Vec4::splat(lambda_nm), Vec4::splat(pdf))
+    }
+
+    /// The hero wavelength (what wavelength-dependent directions follow).
+    pub fn hero(&self) -> f32 {
+        self.nm.x
+    }
+
+    /// `f` at each lane's wavelength.
+    pub fn map(&self, f: impl Fn(f32) -> f32) -> SampledSpectrum {
+        Vec4::from_array(self.nm.to_array().map(f))
+    }
+}
 
 /// The shortest wavelength sampled, nm, and the 1-nm bins above it (to 830 nm).
 const FIRST_NM: f32 = 360.0;
@@ -97,5 +150,26 @@ mod tests {
         assert!((530..600).contains(&densest.unwrap()), "{densest:?}");
         let floor = (UNIFORM / BINS as f64) as f32;
         assert!((360..830).all(|l| visible_wavelength_pdf(l as f32 + 0.5) >= floor * 0.999));
+    }
+
+    #[test]
+    fn the_four_lanes_split_the_density_into_quarters() {
+        for u in [0.0, 0.1, 0.37, 0.74, 0.999] {
+            let w = Wavelengths::sampled(u);
+            let (hero, _) = sample_visible_wavelength(u);
+            assert_eq!(w.hero(), hero);
+            let mut lanes = w.nm.to_array();
+            lanes.sort_by(f32::total_cmp);
+            // Between consecutive lanes lies a quarter of the density.
+            for pair in lanes.windows(2) {
+                let between: f32 = (0..((pair[1] - pair[0]) * 100.0) as usize)
+                    .map(|i| visible_wavelength_pdf(pair[0] + i as f32 * 0.01) * 0.01)
+                    .sum();
+                assert!((between - 0.25).abs() < 3e-3, "{u}: {lanes:?} {between}");
+            }
+            for k in 0..4 {
+                assert_eq!(w.pdf[k], visible_wavelength_pdf(w.nm[k]), "{u}: lane {k}");
+            }
+        }
     }
 }

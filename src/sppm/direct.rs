@@ -9,6 +9,7 @@ use crate::geometry::offset_origin;
 use crate::materials::{ShadingFrame, Transport};
 use crate::sampling::Sampler;
 use crate::scene::NOT_A_LIGHT;
+use crate::spectrum::{SampledSpectrum, Wavelengths};
 
 /// Veach's power heuristic for two strategies with densities `p` (this one) and `q`.
 fn power_heuristic(p: f32, q: f32) -> f32 {
@@ -23,12 +24,12 @@ fn power_heuristic(p: f32, q: f32) -> f32 {
     }
 }
 
-/// Direct light at one visible point at the pass wavelength.
+/// Direct light at one visible point at the pass's wavelengths.
 pub struct DirectLight<'a> {
     /// The scene, its BVH and its light choice.
     pub renderer: &'a Renderer<'a>,
-    /// The pass wavelength.
-    pub lambda_nm: f32,
+    /// The pass's wavelengths.
+    pub wavelengths: &'a Wavelengths,
     /// Where the light arrives.
     pub point: &'a VisiblePoint,
 }
@@ -49,14 +50,14 @@ pub struct ShadowRay {
 #[derive(Clone, Copy, Debug)]
 pub struct DirectTerm {
     /// The weighted radiance it adds.
-    pub value: f32,
+    pub value: SampledSpectrum,
     /// What must be free for it to count.
     pub ray: Option<ShadowRay>,
 }
 
 impl DirectTerm {
     /// A term that is zero whatever else is in the scene.
-    pub const ZERO: DirectTerm = DirectTerm { value: 0.0, ray: None };
+    pub const ZERO: DirectTerm = DirectTerm { value: SampledSpectrum::ZERO, ray: None };
 }
 
 impl DirectLight<'_> {
@@ -68,12 +69,12 @@ impl DirectLight<'_> {
     /// Direct light by sampling a light (chosen by power) and a point on it, weighted by multiple
     /// importance sampling against BSDF sampling (Veach 1997, chapter 9).
     fn light_sampled(&self, rng: &mut Sampler, stats: &mut PassStats) -> DirectTerm {
-        let (renderer, point, lambda_nm) = (self.renderer, self.point, self.lambda_nm);
+        let (renderer, point, wavelengths) = (self.renderer, self.point, self.wavelengths);
         let Some((index, p_choice)) = renderer.light_choice.sample(rng.next_1d()) else {
             return DirectTerm::ZERO;
         };
         let light = &renderer.scene.lights[index];
-        let Some(sample) = light.sample_incident(point.p, rng.next_2d(), lambda_nm) else {
+        let Some(sample) = light.sample_incident(point.p, rng.next_2d(), wavelengths) else {
             return DirectTerm::ZERO;
         };
         let ShadingFrame { n, ng } = point.frame;
@@ -81,7 +82,7 @@ impl DirectLight<'_> {
             return DirectTerm::ZERO;
         }
         let f = point.bsdf.eval(n, point.wo, sample.wi);
-        if f <= 0.0 {
+        if f.max_element() <= 0.0 {
             return DirectTerm::ZERO;
         }
         stats.shadow_rays += 1;
@@ -103,7 +104,7 @@ impl DirectLight<'_> {
     /// Direct light by sampling the BSDF and looking at what emits along the sampled ray, weighted
     /// by multiple importance sampling against light sampling.
     fn bsdf_sampled(&self, rng: &mut Sampler, stats: &mut PassStats) -> DirectTerm {
-        let (renderer, point, lambda_nm) = (self.renderer, self.point, self.lambda_nm);
+        let (renderer, point, wavelengths) = (self.renderer, self.point, self.wavelengths);
         let scene = renderer.scene;
         let (u, u_lobe) = (rng.next_2d(), rng.next_1d());
         let Some(sample) = point.bsdf.sample(point.frame, point.wo, u, u_lobe, Transport::Radiance) else {
@@ -124,7 +125,7 @@ impl DirectLight<'_> {
                 .distant_lights
                 .iter()
                 .map(|&i| {
-                    let radiance = scene.lights[i].escaped_radiance(sample.wi, lambda_nm);
+                    let radiance = scene.lights[i].escaped_radiance(sample.wi, wavelengths);
                     sample.weight * radiance * power_heuristic(sample.pdf, light_pdf(i, Vec3::ZERO))
                 })
                 .sum();
@@ -136,7 +137,7 @@ impl DirectLight<'_> {
         }
         let surface = scene.surface(hit.triangle, hit.barycentric);
         let material = &scene.materials[surface.material as usize];
-        let radiance = material.emitted(lambda_nm, surface.frame.ng, -sample.wi);
+        let radiance = material.emitted(wavelengths, surface.frame.ng, -sample.wi);
         let value =
             sample.weight * radiance * power_heuristic(sample.pdf, light_pdf(light as usize, surface.p));
         DirectTerm { value, ray }

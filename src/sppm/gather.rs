@@ -16,6 +16,7 @@ use super::photons::Photon;
 use super::renderer::{PixelEstimate, VisiblePoint};
 use super::visible::EyeResult;
 use crate::error::K2;
+use crate::spectrum::SampledSpectrum;
 
 /// Photons on surfaces whose normal is within this cosine of perpendicular to the visible
 /// point's (past it on the far side: the back of a thin wall) mark an edge.
@@ -39,7 +40,7 @@ impl Kernel {
     /// What `photon` adds at `vp` (kernel-weighted reflected flux, and the same with the
     /// Laplacian), or `None` when it is out of reach or on the other side; a photon on a surface
     /// meeting the point's at an edge adds only its edge term, to the second.
-    fn weigh(&self, photon: &Photon, vp: &VisiblePoint) -> Option<[f32; 2]> {
+    fn weigh(&self, photon: &Photon, vp: &VisiblePoint) -> Option<[SampledSpectrum; 2]> {
         let d2 = photon.p.distance_squared(vp.p);
         if d2 >= self.r2 {
             return None;
@@ -47,7 +48,7 @@ impl Kernel {
         let t2 = d2 / self.r2;
         let facing = photon.ng.dot(vp.frame.ng) * vp.frame.ng.dot(vp.wo).signum();
         if facing <= 0.0 {
-            return (facing > -EDGE_COSINE).then(|| [0.0, self.edge_term(photon, vp, t2)]);
+            return (facing > -EDGE_COSINE).then(|| [SampledSpectrum::ZERO, self.edge_term(photon, vp, t2)]);
         }
         let weighted = photon.flux * vp.bsdf.eval(vp.frame.n, vp.wo, photon.wi);
         Some([
@@ -59,7 +60,7 @@ impl Kernel {
     /// A photon on a surface meeting the visible point's at an edge stands for the photons the
     /// disc misses beyond that edge: what it would add there (its direction mirrored to the
     /// visible point's side), as a negative bias in Laplacian units (`bias = k2 r^2 / 2 * term`).
-    fn edge_term(&self, photon: &Photon, vp: &VisiblePoint, t2: f32) -> f32 {
+    fn edge_term(&self, photon: &Photon, vp: &VisiblePoint, t2: f32) -> SampledSpectrum {
         let n = vp.frame.n;
         let wi = if photon.wi.dot(n) * vp.wo.dot(n) < 0.0 {
             photon.wi - 2.0 * photon.wi.dot(n) * n
@@ -102,8 +103,8 @@ impl PhotonSet {
 
     /// The kernel-weighted sum of the photons' reflected flux at `vp`, and the same with the
     /// kernel's Laplacian, before the path throughput.
-    pub fn sum_at(&self, vp: &VisiblePoint) -> [f32; 2] {
-        let mut sums = [0.0f32; 2];
+    pub fn sum_at(&self, vp: &VisiblePoint) -> [SampledSpectrum; 2] {
+        let mut sums = [SampledSpectrum::ZERO; 2];
         if self.reach.is_some_and(|r| within(r, vp.p)) {
             self.grid.for_each_near(vp.p, |range| {
                 for photon in &self.sorted[range] {
@@ -118,10 +119,10 @@ impl PhotonSet {
 }
 
 /// A pixel's estimate from its eye result and the photon sums at its visible point.
-pub fn estimate(eye: &EyeResult, [sum, laplacian]: [f32; 2]) -> PixelEstimate {
+pub fn estimate(eye: &EyeResult, [sum, laplacian]: [SampledSpectrum; 2]) -> PixelEstimate {
     match eye.point {
         Some(vp) => PixelEstimate { radiance: eye.radiance + vp.beta * sum, laplacian: vp.beta * laplacian },
-        None => PixelEstimate { radiance: eye.radiance, laplacian: 0.0 },
+        None => PixelEstimate { radiance: eye.radiance, laplacian: SampledSpectrum::ZERO },
     }
 }
 
@@ -129,6 +130,6 @@ pub fn estimate(eye: &EyeResult, [sum, laplacian]: [f32; 2]) -> PixelEstimate {
 pub fn gather(eye: &[EyeResult], set: &PhotonSet) -> Vec<PixelEstimate> {
     eye.par_iter()
         .with_min_len(64)
-        .map(|e| estimate(e, e.point.map_or([0.0; 2], |vp| set.sum_at(&vp))))
+        .map(|e| estimate(e, e.point.map_or([SampledSpectrum::ZERO; 2], |vp| set.sum_at(&vp))))
         .collect()
 }

@@ -14,6 +14,7 @@ use super::renderer::{PassSamples, PassStats, Renderer, MAX_DEPTH};
 use crate::geometry::offset_origin;
 use crate::materials::Transport;
 use crate::sampling::{stream, Sampler, Stream};
+use crate::spectrum::SampledSpectrum;
 
 /// A stored photon.
 #[derive(Clone, Copy, Debug)]
@@ -24,8 +25,8 @@ pub struct Photon {
     pub wi: Vec3,
     /// Geometric normal of the surface it landed on, facing `wi`.
     pub ng: Vec3,
-    /// Its flux at the pass wavelength, already divided by the photons per pass.
-    pub flux: f32,
+    /// Its flux at the pass's wavelengths, already divided by the photons per pass.
+    pub flux: SampledSpectrum,
 }
 
 /// A photon path about to trace its next segment.
@@ -36,7 +37,7 @@ pub struct PhotonState {
     /// Its unit direction.
     pub direction: Vec3,
     /// The flux carried.
-    pub flux: f32,
+    pub flux: SampledSpectrum,
     /// Segments traced before this one.
     pub depth: u32,
     /// The path's random stream, where this segment leaves it.
@@ -53,11 +54,12 @@ pub fn photon_chunks(count: usize) -> impl IndexedParallelIterator<Item = std::o
 }
 
 /// Photon path `k` of `pass` as it leaves its light, and the index of that light; `None` when no
-/// light emits at the pass wavelength.
+/// light emits at the pass's wavelengths.
 pub fn start_photon(renderer: &Renderer, pass: &PassSamples, k: u64) -> Option<(PhotonState, usize)> {
     let mut rng = stream(renderer.settings.seed, Stream::Photon, pass.index, k);
     let (index, p_light) = renderer.light_choice.sample(rng.next_1d())?;
-    let emitted = renderer.scene.lights[index].emit_photon(rng.next_2d(), rng.next_2d(), pass.lambda_nm)?;
+    let emitted =
+        renderer.scene.lights[index].emit_photon(rng.next_2d(), rng.next_2d(), &pass.wavelengths)?;
     let flux = emitted.flux / (p_light * renderer.settings.photons_per_pass as f32);
     Some((PhotonState { origin: emitted.origin, direction: emitted.direction, flux, depth: 0, rng }, index))
 }
@@ -94,7 +96,7 @@ pub fn continue_photon(
         let material = &scene.materials[surface.material as usize];
         let wo = -state.direction;
         let rng = &mut state.rng;
-        let bsdf = material.bsdf(surface.uv, pass.lambda_nm, rng.next_1d());
+        let bsdf = material.bsdf(surface.uv, &pass.wavelengths, rng.next_1d());
         if !bsdf.is_delta() && state.depth > 0 {
             let ng = if surface.frame.ng.dot(wo) < 0.0 { -surface.frame.ng } else { surface.frame.ng };
             out.push(Photon { p: surface.p, wi: wo, ng, flux: state.flux });
@@ -105,9 +107,9 @@ pub fn continue_photon(
         else {
             break;
         };
-        // Russian roulette with the throughput's change as the survival probability keeps the
-        // flux of surviving photons nearly constant.
-        let survive = sample.weight.min(1.0);
+        // Russian roulette with the throughput's change (at its largest wavelength) as the
+        // survival probability keeps the flux of surviving photons nearly constant.
+        let survive = (sample.weight.element_sum() / 4.0).min(1.0);
         if rng.next_1d() >= survive {
             break;
         }

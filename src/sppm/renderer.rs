@@ -8,7 +8,7 @@ use crate::lights::Light;
 use crate::materials::{Bsdf, ShadingFrame};
 use crate::sampling::{pass_sample, Distribution1D};
 use crate::scene::Scene;
-use crate::spectrum::sample_visible_wavelength;
+use crate::spectrum::{SampledSpectrum, Wavelengths};
 
 use super::radius;
 
@@ -24,10 +24,10 @@ pub struct VisiblePoint {
     pub frame: ShadingFrame,
     /// Unit direction back along the path.
     pub wo: Vec3,
-    /// The BSDF at the pass wavelength.
+    /// The BSDF at the pass's wavelengths.
     pub bsdf: Bsdf,
     /// Path throughput from the camera to here.
-    pub beta: f32,
+    pub beta: SampledSpectrum,
     /// The largest coordinate of its triangle (for offsetting rays that leave it).
     pub scale: f32,
 }
@@ -47,20 +47,29 @@ pub struct SppmSettings {
     pub initial_radius: f64,
     /// The random seed.
     pub seed: u64,
-    /// Render every pass at this wavelength instead of sampling one per pass.
+    /// Render every pass at this wavelength instead of sampling them per pass.
     pub fixed_wavelength_nm: Option<f32>,
+    /// The scene bends light by wavelength (a dispersive material): a pass's paths carry one
+    /// wavelength, not four.
+    pub dispersive: bool,
 }
 
 impl SppmSettings {
-    /// The wavelength and radius of pass `index` (0-based).
+    /// The wavelengths and radius of pass `index` (0-based).
     pub fn pass_samples(&self, index: u64) -> PassSamples {
-        let (lambda_nm, lambda_pdf) = match self.fixed_wavelength_nm {
-            Some(lambda_nm) => (lambda_nm, 1.0),
-            None => sample_visible_wavelength(pass_sample(self.seed, index)),
+        let wavelengths = match self.fixed_wavelength_nm {
+            Some(lambda_nm) => Wavelengths::single(lambda_nm, 1.0),
+            None => {
+                let sampled = Wavelengths::sampled(pass_sample(self.seed, index));
+                match self.dispersive {
+                    true => Wavelengths::single(sampled.hero(), sampled.pdf.x),
+                    false => sampled,
+                }
+            }
         };
         let r1_squared = self.initial_radius * self.initial_radius;
         let radius = radius::radius_squared(r1_squared, self.alpha, index + 1).sqrt() as f32;
-        PassSamples { index, lambda_nm, lambda_pdf, radius }
+        PassSamples { index, wavelengths, radius }
     }
 }
 
@@ -69,21 +78,19 @@ impl SppmSettings {
 pub struct PassSamples {
     /// The pass index, from 0.
     pub index: u64,
-    /// The pass wavelength.
-    pub lambda_nm: f32,
-    /// Its density per nanometre.
-    pub lambda_pdf: f32,
+    /// The wavelengths every path carries.
+    pub wavelengths: Wavelengths,
     /// The gather radius.
     pub radius: f32,
 }
 
-/// One pixel's estimate for one pass, at the pass wavelength.
+/// One pixel's estimate for one pass, at the pass's wavelengths.
 #[derive(Clone, Copy, Debug, Default)]
 pub struct PixelEstimate {
     /// Spectral radiance.
-    pub radiance: f32,
+    pub radiance: SampledSpectrum,
     /// The same estimate with the kernel's Laplacian in place of the kernel (for the bias term).
-    pub laplacian: f32,
+    pub laplacian: SampledSpectrum,
 }
 
 /// Counts of the work a pass did, for the benchmark.

@@ -27,6 +27,7 @@ use super::visible::{
     continue_eye_path, start_eye_path, trace_eye_path, with_direct, EyeEnd, EyeResult, EyeState,
 };
 use crate::geometry::ray_meets_box;
+use crate::spectrum::SampledSpectrum;
 
 /// The box every frame's moving triangles lie in this pass, grown a little for rounding.
 #[derive(Clone, Copy)]
@@ -125,13 +126,13 @@ pub fn run_shared_pass(
     let common = common_photons(&shared, &always_valid);
     let common_set = PhotonSet::new(&common, pass.radius);
     let eyes = share_eyes.then(|| trace_shared_eyes(statics, pass, swept));
-    let common_sums: Vec<[f32; 2]> = match &eyes {
+    let common_sums: Vec<[SampledSpectrum; 2]> = match &eyes {
         Some((records, eye_stats)) => {
             stats = stats + *eye_stats;
             records
                 .par_iter()
                 .with_min_len(64)
-                .map(|r| r.end.result.point.map_or([0.0; 2], |vp| common_set.sum_at(&vp)))
+                .map(|r| r.end.result.point.map_or([SampledSpectrum::ZERO; 2], |vp| common_set.sum_at(&vp)))
                 .collect()
         }
         None => Vec::new(),
@@ -147,14 +148,18 @@ pub fn run_shared_pass(
                 let (eye, common_sum, eye_stats) = match &eyes {
                     Some((records, _)) => match frame_eye(frame, pass, &records[pixel]) {
                         (eye, false, s) => (eye, common_sums[pixel], s),
-                        (eye, true, s) => (eye, eye.point.map_or([0.0; 2], |vp| common_set.sum_at(&vp)), s),
+                        (eye, true, s) => (
+                            eye,
+                            eye.point.map_or([SampledSpectrum::ZERO; 2], |vp| common_set.sum_at(&vp)),
+                            s,
+                        ),
                     },
                     None => {
                         let (eye, s) = trace_eye_path(frame, pass, pixel);
-                        (eye, eye.point.map_or([0.0; 2], |vp| common_set.sum_at(&vp)), s)
+                        (eye, eye.point.map_or([SampledSpectrum::ZERO; 2], |vp| common_set.sum_at(&vp)), s)
                     }
                 };
-                let own_sum = eye.point.map_or([0.0; 2], |vp| own_set.sum_at(&vp));
+                let own_sum = eye.point.map_or([SampledSpectrum::ZERO; 2], |vp| own_set.sum_at(&vp));
                 let sums = [common_sum[0] + own_sum[0], common_sum[1] + own_sum[1]];
                 (estimate(&eye, sums), eye_stats)
             })
@@ -320,7 +325,7 @@ fn frame_eye(frame: &Renderer, pass: &PassSamples, record: &EyeRecord) -> (EyeRe
                 frame.accel.moving_occluded(r.origin, r.direction, r.t_max)
             });
         if blocked {
-            0.0
+            SampledSpectrum::ZERO
         } else {
             term.value
         }

@@ -12,12 +12,13 @@ use super::renderer::{PassSamples, PassStats, Renderer, VisiblePoint, MAX_DEPTH}
 use crate::geometry::offset_origin;
 use crate::materials::{Bsdf, Transport};
 use crate::sampling::{pixel_stream, Sampler};
+use crate::spectrum::SampledSpectrum;
 
 /// A pixel's eye path: the radiance found along it, and its visible point if it has one.
 #[derive(Clone, Copy, Debug)]
 pub struct EyeResult {
     /// Emission seen along the path plus direct light at the visible point, times throughput.
-    pub radiance: f32,
+    pub radiance: SampledSpectrum,
     /// Where photons are gathered.
     pub point: Option<VisiblePoint>,
 }
@@ -30,9 +31,9 @@ pub struct EyeState {
     /// Its unit direction.
     pub direction: Vec3,
     /// Throughput from the camera.
-    pub beta: f32,
+    pub beta: SampledSpectrum,
     /// Radiance found so far.
-    pub radiance: f32,
+    pub radiance: SampledSpectrum,
     /// Segments traced before this one.
     pub depth: u32,
     /// The path's random stream, where this segment leaves it.
@@ -46,7 +47,7 @@ pub struct EyeEnd {
     /// The pixel's result.
     pub result: EyeResult,
     /// Radiance found before the visible point.
-    pub radiance_before: f32,
+    pub radiance_before: SampledSpectrum,
     /// Light-sampled and BSDF-sampled direct light at the visible point.
     pub direct: [DirectTerm; 2],
 }
@@ -68,7 +69,17 @@ pub fn start_eye_path(renderer: &Renderer, pass: &PassSamples, pixel: usize) -> 
         }
         None => camera.ray(film, aspect),
     };
-    (EyeState { origin, direction, beta: 1.0, radiance: 0.0, depth: 0, rng }, stats)
+    (
+        EyeState {
+            origin,
+            direction,
+            beta: SampledSpectrum::ONE,
+            radiance: SampledSpectrum::ZERO,
+            depth: 0,
+            rng,
+        },
+        stats,
+    )
 }
 
 /// Traces pixel `pixel`'s camera path for `pass`.
@@ -91,21 +102,21 @@ pub fn continue_eye_path(
     let mut stats = PassStats::default();
     let mut point = None;
     let mut direct = [DirectTerm::ZERO; 2];
-    let mut radiance_before = 0.0;
+    let mut radiance_before = SampledSpectrum::ZERO;
     while state.depth < MAX_DEPTH {
         stats.eye_rays += 1;
         let hit = renderer.accel.intersect(state.origin, state.direction, f32::INFINITY);
         watch(&state, hit.map_or(f32::INFINITY, |h| h.t));
         let Some(hit) = hit else {
-            state.radiance += state.beta * scene.escaped_radiance(state.direction, pass.lambda_nm);
+            state.radiance += state.beta * scene.escaped_radiance(state.direction, &pass.wavelengths);
             break;
         };
         let surface = scene.surface(hit.triangle, hit.barycentric);
         let material = &scene.materials[surface.material as usize];
         let wo = -state.direction;
-        state.radiance += state.beta * material.emitted(pass.lambda_nm, surface.frame.ng, wo);
+        state.radiance += state.beta * material.emitted(&pass.wavelengths, surface.frame.ng, wo);
         let rng = &mut state.rng;
-        let bsdf = material.bsdf(surface.uv, pass.lambda_nm, rng.next_1d());
+        let bsdf = material.bsdf(surface.uv, &pass.wavelengths, rng.next_1d());
         if bsdf == Bsdf::Black {
             break;
         }
@@ -118,7 +129,7 @@ pub fn continue_eye_path(
                 beta: state.beta,
                 scale: surface.scale,
             };
-            direct = DirectLight { renderer, lambda_nm: pass.lambda_nm, point: &visible }
+            direct = DirectLight { renderer, wavelengths: &pass.wavelengths, point: &visible }
                 .estimate(rng, &mut stats);
             radiance_before = state.radiance;
             state.radiance = with_direct(radiance_before, state.beta, direct.map(|t| t.value));
@@ -140,6 +151,10 @@ pub fn continue_eye_path(
 
 /// The radiance of an eye path: what it found before its visible point plus the direct light
 /// there (one function, so that a path resumed in another frame adds in the same order).
-pub fn with_direct(radiance_before: f32, beta: f32, [light, bsdf]: [f32; 2]) -> f32 {
+pub fn with_direct(
+    radiance_before: SampledSpectrum,
+    beta: SampledSpectrum,
+    [light, bsdf]: [SampledSpectrum; 2],
+) -> SampledSpectrum {
     radiance_before + beta * (light + bsdf)
 }
