@@ -13,7 +13,6 @@ use std::time::Instant;
 use crate::accel::{Accel, Bvh};
 use crate::error::{summarize, ErrorSummary, PixelError};
 use crate::film::{Film, FilmMode};
-use crate::materials::Material;
 use crate::monitor::{ErrorSettings, Monitor, StopReason};
 use crate::partial;
 use crate::progress::Progress;
@@ -316,7 +315,6 @@ impl Shot {
             initial_radius: settings.radius.unwrap_or_else(|| default_radius(&first, photons_per_pass)),
             seed: settings.seed,
             fixed_wavelength_nm: settings.wavelength_nm,
-            dispersive: first.materials.iter().any(Material::is_dispersive),
         };
         let still =
             (!prepared.has_motion()).then(|| (first, Accel::new(Arc::clone(&fixed_bvh), Bvh::empty())));

@@ -100,6 +100,12 @@ impl Material {
         self.transmission > 0.0 && self.ior.is_dispersive()
     }
 
+    /// Whether `bsdf`, resolved from this material, sends each wavelength its own way: a path
+    /// through it can carry only its hero wavelength.
+    pub fn separates_wavelengths(&self, bsdf: &Bsdf) -> bool {
+        self.ior.is_dispersive() && matches!(bsdf, Bsdf::Dielectric { .. } | Bsdf::ThinDielectric { .. })
+    }
+
     /// Whether light passes through unchanged (a thin fully transmissive wall of index 1, as area
     /// lights are): such surfaces cast no shadow.
     pub fn is_invisible(&self) -> bool {

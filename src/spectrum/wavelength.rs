@@ -30,7 +30,7 @@ pub const LANES: usize = 4;
 /// inverse CDF. Each lane alone is distributed as [`sample_visible_wavelength`] samples, so the
 /// mean over lanes of `L cmf / p` is an unbiased estimate, and the four together cover the
 /// spectrum evenly. Where the index of refraction depends on wavelength the lanes cannot share
-/// a path, and every lane holds the hero ([`Wavelengths::single`]).
+/// a path: past such a refraction the path follows the hero alone ([`hero_only`]).
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct Wavelengths {
     /// The wavelengths, nm.
@@ -39,6 +39,13 @@ pub struct Wavelengths {
     pub pdf: Vec4,
     /// The D65 illuminant (luminance 1) at each, which every light's emission carries.
     pub d65: SampledSpectrum,
+}
+
+/// A path's value once it follows the hero wavelength alone (past a refraction that depends on
+/// wavelength; pbrt-v4's `TerminateSecondary`): the hero's lane times the number of lanes, the
+/// others zero. The mean over lanes is then the hero's own estimate, which is unbiased alone.
+pub fn hero_only(value: SampledSpectrum) -> SampledSpectrum {
+    Vec4::new(value.x * LANES as f32, 0.0, 0.0, 0.0)
 }
 
 impl Wavelengths {

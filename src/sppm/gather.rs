@@ -16,7 +16,7 @@ use super::photons::Photon;
 use super::renderer::{PixelEstimate, VisiblePoint};
 use super::visible::EyeResult;
 use crate::error::K2;
-use crate::spectrum::SampledSpectrum;
+use crate::spectrum::{SampledSpectrum, LANES};
 
 /// Photons on surfaces whose normal is within this cosine of perpendicular to the visible
 /// point's (past it on the far side: the back of a thin wall) mark an edge.
@@ -50,7 +50,7 @@ impl Kernel {
         if facing <= 0.0 {
             return (facing > -EDGE_COSINE).then(|| [SampledSpectrum::ZERO, self.edge_term(photon, vp, t2)]);
         }
-        let weighted = photon.flux * vp.bsdf.eval(vp.frame.n, vp.wo, photon.wi);
+        let weighted = pair_flux(photon, vp) * vp.bsdf.eval(vp.frame.n, vp.wo, photon.wi);
         Some([
             weighted * self.scale * (1.0 - t2) * (1.0 - t2),
             weighted * self.laplacian_scale * (1.0 - 2.0 * t2),
@@ -67,8 +67,19 @@ impl Kernel {
         } else {
             photon.wi
         };
-        let missed = photon.flux * vp.bsdf.eval(n, vp.wo, wi) * self.scale * (1.0 - t2) * (1.0 - t2);
+        let missed =
+            pair_flux(photon, vp) * vp.bsdf.eval(n, vp.wo, wi) * self.scale * (1.0 - t2) * (1.0 - t2);
         -missed / (0.5 * K2 as f32 * self.r2)
+    }
+}
+
+/// `photon`'s flux as the path joining it to `vp` carries it: both halves scale their hero lane
+/// by the lanes' count when they drop the others, and the joined path must do so once.
+fn pair_flux(photon: &Photon, vp: &VisiblePoint) -> SampledSpectrum {
+    if photon.hero_only && vp.hero_only {
+        photon.flux / LANES as f32
+    } else {
+        photon.flux
     }
 }
 

@@ -14,7 +14,7 @@ use super::renderer::{PassSamples, PassStats, Renderer, MAX_DEPTH};
 use crate::geometry::offset_origin;
 use crate::materials::Transport;
 use crate::sampling::{stream, Sampler, Stream};
-use crate::spectrum::SampledSpectrum;
+use crate::spectrum::{hero_only, SampledSpectrum};
 
 /// A stored photon.
 #[derive(Clone, Copy, Debug)]
@@ -27,6 +27,8 @@ pub struct Photon {
     pub ng: Vec3,
     /// Its flux at the pass's wavelengths, already divided by the photons per pass.
     pub flux: SampledSpectrum,
+    /// Its path carries its hero wavelength alone (it passed a dispersive refraction).
+    pub hero_only: bool,
 }
 
 /// A photon path about to trace its next segment.
@@ -38,6 +40,8 @@ pub struct PhotonState {
     pub direction: Vec3,
     /// The flux carried.
     pub flux: SampledSpectrum,
+    /// The path carries its hero wavelength alone.
+    pub hero_only: bool,
     /// Segments traced before this one.
     pub depth: u32,
     /// The path's random stream, where this segment leaves it.
@@ -61,7 +65,15 @@ pub fn start_photon(renderer: &Renderer, pass: &PassSamples, k: u64) -> Option<(
     let emitted =
         renderer.scene.lights[index].emit_photon(rng.next_2d(), rng.next_2d(), &pass.wavelengths)?;
     let flux = emitted.flux / (p_light * renderer.settings.photons_per_pass as f32);
-    Some((PhotonState { origin: emitted.origin, direction: emitted.direction, flux, depth: 0, rng }, index))
+    let state = PhotonState {
+        origin: emitted.origin,
+        direction: emitted.direction,
+        flux,
+        hero_only: false,
+        depth: 0,
+        rng,
+    };
+    Some((state, index))
 }
 
 /// Traces photon path `k` of `pass`, appending what it stores to `out`.
@@ -99,7 +111,7 @@ pub fn continue_photon(
         let bsdf = material.bsdf(surface.uv, &pass.wavelengths, rng.next_1d());
         if !bsdf.is_delta() && state.depth > 0 {
             let ng = if surface.frame.ng.dot(wo) < 0.0 { -surface.frame.ng } else { surface.frame.ng };
-            out.push(Photon { p: surface.p, wi: wo, ng, flux: state.flux });
+            out.push(Photon { p: surface.p, wi: wo, ng, flux: state.flux, hero_only: state.hero_only });
             stats.photons_stored += 1;
         }
         let Some(sample) =
@@ -112,6 +124,10 @@ pub fn continue_photon(
         let survive = (sample.weight.element_sum() / 4.0).min(1.0);
         if rng.next_1d() >= survive {
             break;
+        }
+        if !state.hero_only && material.separates_wavelengths(&bsdf) {
+            state.flux = hero_only(state.flux);
+            state.hero_only = true;
         }
         state.flux *= sample.weight / survive;
         state.origin = offset_origin(surface.p, surface.frame.ng, sample.wi, surface.scale);

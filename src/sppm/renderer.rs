@@ -28,6 +28,8 @@ pub struct VisiblePoint {
     pub bsdf: Bsdf,
     /// Path throughput from the camera to here.
     pub beta: SampledSpectrum,
+    /// The path carries its hero wavelength alone ([`crate::spectrum::hero_only`]).
+    pub hero_only: bool,
     /// The largest coordinate of its triangle (for offsetting rays that leave it).
     pub scale: f32,
 }
@@ -49,9 +51,6 @@ pub struct SppmSettings {
     pub seed: u64,
     /// Render every pass at this wavelength instead of sampling them per pass.
     pub fixed_wavelength_nm: Option<f32>,
-    /// The scene bends light by wavelength (a dispersive material): a pass's paths carry one
-    /// wavelength, not four.
-    pub dispersive: bool,
 }
 
 impl SppmSettings {
@@ -59,13 +58,7 @@ impl SppmSettings {
     pub fn pass_samples(&self, index: u64) -> PassSamples {
         let wavelengths = match self.fixed_wavelength_nm {
             Some(lambda_nm) => Wavelengths::single(lambda_nm, 1.0),
-            None => {
-                let sampled = Wavelengths::sampled(pass_sample(self.seed, index));
-                match self.dispersive {
-                    true => Wavelengths::single(sampled.hero(), sampled.pdf.x),
-                    false => sampled,
-                }
-            }
+            None => Wavelengths::sampled(pass_sample(self.seed, index)),
         };
         let r1_squared = self.initial_radius * self.initial_radius;
         let radius = radius::radius_squared(r1_squared, self.alpha, index + 1).sqrt() as f32;

@@ -12,7 +12,7 @@ use super::renderer::{PassSamples, PassStats, Renderer, VisiblePoint, MAX_DEPTH}
 use crate::geometry::offset_origin;
 use crate::materials::{Bsdf, Transport};
 use crate::sampling::{pixel_stream, Sampler};
-use crate::spectrum::SampledSpectrum;
+use crate::spectrum::{hero_only, SampledSpectrum};
 
 /// A pixel's eye path: the radiance found along it, and its visible point if it has one.
 #[derive(Clone, Copy, Debug)]
@@ -32,6 +32,8 @@ pub struct EyeState {
     pub direction: Vec3,
     /// Throughput from the camera.
     pub beta: SampledSpectrum,
+    /// The path carries its hero wavelength alone (it passed a dispersive refraction).
+    pub hero_only: bool,
     /// Radiance found so far.
     pub radiance: SampledSpectrum,
     /// Segments traced before this one.
@@ -74,6 +76,7 @@ pub fn start_eye_path(renderer: &Renderer, pass: &PassSamples, pixel: usize) -> 
             origin,
             direction,
             beta: SampledSpectrum::ONE,
+            hero_only: false,
             radiance: SampledSpectrum::ZERO,
             depth: 0,
             rng,
@@ -127,6 +130,7 @@ pub fn continue_eye_path(
                 wo,
                 bsdf,
                 beta: state.beta,
+                hero_only: state.hero_only,
                 scale: surface.scale,
             };
             direct = DirectLight { renderer, wavelengths: &pass.wavelengths, point: &visible }
@@ -140,6 +144,10 @@ pub fn continue_eye_path(
         else {
             break;
         };
+        if !state.hero_only && material.separates_wavelengths(&bsdf) {
+            state.beta = hero_only(state.beta);
+            state.hero_only = true;
+        }
         state.beta *= sample.weight;
         state.origin = offset_origin(surface.p, surface.frame.ng, sample.wi, surface.scale);
         state.direction = sample.wi;
