@@ -6,7 +6,7 @@
 //! `E = t_{N-1, 1-beta/2} sqrt(Var / N) + |B|`, where
 //! - `Var / N` is the variance of the pixel's value. The image is white-balanced, i.e. a ratio
 //!   `Y = W sum(y_i) / sum(w_i)` with `w_i` each pass's estimate of the white's luminance (all
-//!   pixels of a pass share its wavelength). Its variance, by the delta method for ratio
+//!   pixels of a pass share its wavelengths). Its variance, by the delta method for ratio
 //!   estimators, is `W^2 sum((y_i - R w_i)^2) / (sum w_i)^2` with `R = sum y_i / sum w_i`, times
 //!   N / (N - 1); it needs only sums (of y^2, y w, w and w^2), so merging stays exact. (Treating the
 //!   passes as equally weighted would underestimate it by about half: measured on the furnace,

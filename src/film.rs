@@ -1,6 +1,7 @@
 //! The film (DESIGN.md step 5): per-pixel sums over passes, and the EXR they become.
 //!
-//! A pixel keeps only sums: of the pass estimates converted to XYZ (`L cmf(lambda) / p(lambda)`),
+//! A pixel keeps only sums: of the pass estimates converted to XYZ (the mean over the pass's four
+//! wavelengths of `L cmf(lambda) / p(lambda)`),
 //! of the square of their luminance, of the Laplacian term's luminance, and the pass count.
 //! Two films of disjoint pass ranges therefore merge exactly by adding. The image is the mean,
 //! white-balanced (below), XYZ to linear Rec.709, written as one part with `Combined.R/G/B/A`
@@ -97,9 +98,9 @@ pub struct PixelSums {
 
 /// The image being rendered: sums per pixel, row-major from the top-left.
 ///
-/// White balance: every pixel of a pass shares its wavelength, so with few passes the estimate
-/// `sum L cmf / p` carries a colour cast common to the whole image (about 10% per channel at 32
-/// passes for a grey scene). The film also sums the same estimator for the white illuminant
+/// White balance: every pixel of a pass shares its wavelengths, so with few passes the estimate
+/// `sum L cmf / p` carries a colour cast common to the whole image (with one wavelength a pass,
+/// about 10% per channel at 32 passes for a grey scene). The film also sums the same estimator for the white illuminant
 /// itself, `white = sum d65 cmf / p`, whose true value is known, and scales each XYZ channel by
 /// `true white / estimated white` (a ratio estimator: consistent, exact for any spectrum
 /// proportional to D65, and additive like every other sum, so merging stays exact).
@@ -321,7 +322,8 @@ mod tests {
         let mut film = Film::new(2, 1, FilmMode::Spectral, 0);
         for i in 0..passes {
             let lambda = Wavelengths::sampled(pass_sample(5, i));
-            let pixel = (lambda.map(&radiance), SampledSpectrum::ZERO);
+            let pixel =
+                (SampledSpectrum::from_array(lambda.nm.to_array().map(&radiance)), SampledSpectrum::ZERO);
             film.add_pass(&lambda, 0.1, [pixel, pixel].into_iter());
         }
         film

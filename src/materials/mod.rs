@@ -1,4 +1,4 @@
-//! Materials (what the glTF file says) and BSDFs (a material resolved at one wavelength).
+//! Materials (what the glTF file says) and BSDFs (a material resolved at a path's wavelengths).
 //!
 //! A [`Material`] holds the glTF metallic-roughness parameters with spectra; [`Material::bsdf`]
 //! resolves it at the pass's wavelengths into a closed [`Bsdf`] with a value per wavelength

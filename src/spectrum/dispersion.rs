@@ -1,7 +1,7 @@
 //! Index of refraction as a function of wavelength: the laws materials can follow.
 //!
-//! A material's index is one function of wavelength, evaluated at the pass wavelength; a path
-//! never changes its wavelength (unlike renderers that draw a new wavelength at each glass hit).
+//! A material's index is one function of wavelength, evaluated at the path's hero wavelength; a
+//! path never changes it (unlike renderers that draw a new wavelength at each glass hit).
 //! - constant: no dispersion;
 //! - Abbe: the `KHR_materials_dispersion` law, `n = max(n_d + (n_d - 1) / V_d (523655 / l^2 -
 //!   1.5168), 1)` with l in nm (a two-term Cauchy law through n_d with n_F - n_C = (n_d - 1) / V_d);

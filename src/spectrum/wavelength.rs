@@ -69,11 +69,6 @@ impl Wavelengths {
     pub fn hero(&self) -> f32 {
         self.nm.x
     }
-
-    /// `f` at each lane's wavelength.
-    pub fn map(&self, f: impl Fn(f32) -> f32) -> SampledSpectrum {
-        Vec4::from_array(self.nm.to_array().map(f))
-    }
 }
 
 /// The shortest wavelength sampled, nm, and the 1-nm bins above it (to 830 nm).

@@ -1,7 +1,7 @@
 //! One pass shared by a block of frames (Weiss & Grosch 2012, "Stochastic Progressive Photon
 //! Mapping for Dynamic Scenes"; DESIGN.md, "Frames, and reuse across frames").
 //!
-//! Every frame of the block renders the same pass: the same wavelength, shutter point, radius
+//! Every frame of the block renders the same pass: the same wavelengths, shutter point, radius
 //! and random streams. Paths are traced once against the static triangles, and every segment
 //! that meets the box the moving triangles fill this pass (in any frame) is kept with the path's
 //! state there. Each frame tests only those segments against its own moving triangles: a path
