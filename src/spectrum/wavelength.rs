@@ -17,6 +17,7 @@ use std::sync::OnceLock;
 use glam::Vec4;
 
 use super::{cmf, d65};
+use crate::sampling::Distribution1D;
 
 /// A spectral quantity at a path's four wavelengths ([`Wavelengths`]), one per lane.
 pub type SampledSpectrum = Vec4;
@@ -81,40 +82,25 @@ const BINS: usize = 470;
 /// 4096 passes (at 384 and at 806 nm).
 const UNIFORM: f64 = 0.25;
 
-/// The density per 1-nm bin and its cumulative sum (`BINS + 1` entries, from 0 to 1).
-struct Table {
-    density: Vec<f32>,
-    cumulative: Vec<f32>,
-}
-
-fn table() -> &'static Table {
-    static TABLE: OnceLock<Table> = OnceLock::new();
-    TABLE.get_or_init(|| {
+/// The density over the 1-nm bins (constant within each).
+fn density() -> &'static Distribution1D {
+    static DENSITY: OnceLock<Distribution1D> = OnceLock::new();
+    DENSITY.get_or_init(|| {
         let weight = |i: usize| {
             let lambda_nm = FIRST_NM + i as f32 + 0.5;
             let c = cmf(lambda_nm);
             f64::from((c.x + 3.0 * c.y + c.z) * d65(lambda_nm))
         };
         let total: f64 = (0..BINS).map(weight).sum();
-        let density: Vec<f64> =
-            (0..BINS).map(|i| (1.0 - UNIFORM) * weight(i) / total + UNIFORM / BINS as f64).collect();
-        let mut cumulative = vec![0.0f64];
-        for d in &density {
-            cumulative.push(cumulative.last().unwrap() + d);
-        }
-        Table {
-            density: density.iter().map(|&d| d as f32).collect(),
-            cumulative: cumulative.iter().map(|&c| c as f32).collect(),
-        }
+        Distribution1D::new((0..BINS).map(|i| (1.0 - UNIFORM) * weight(i) / total + UNIFORM / BINS as f64))
     })
 }
 
 /// The wavelength for a uniform number `u` in [0, 1), with its density per nanometre.
 pub fn sample_visible_wavelength(u: f32) -> (f32, f32) {
-    let Table { density, cumulative } = table();
-    let bin = cumulative.partition_point(|&c| c <= u).clamp(1, BINS) - 1;
-    let within = ((u - cumulative[bin]) / density[bin]).clamp(0.0, 1.0 - f32::EPSILON);
-    (FIRST_NM + bin as f32 + within, density[bin])
+    let (x, _) = density().sample_continuous(u).expect("every bin has some density");
+    let lambda_nm = FIRST_NM + x * BINS as f32;
+    (lambda_nm, visible_wavelength_pdf(lambda_nm))
 }
 
 /// The density of [`sample_visible_wavelength`] at `lambda_nm`.
@@ -123,7 +109,7 @@ pub fn visible_wavelength_pdf(lambda_nm: f32) -> f32 {
     if !(0.0..BINS as f32).contains(&offset) {
         return 0.0;
     }
-    table().density[offset as usize]
+    density().probability(offset as usize)
 }
 
 #[cfg(test)]
