@@ -7,8 +7,9 @@ use std::time::Instant;
 
 use super::gather::{gather, PhotonSet};
 use super::photons::{photon_chunks, trace_photon, Photon};
-use super::renderer::{PassSamples, PassStats, PixelEstimate, Renderer};
+use super::renderer::{collect_counting, PassSamples, PassStats, PixelEstimate, Renderer};
 use super::visible::{trace_eye_path, EyeResult};
+use crate::spectrum::SampledSpectrum;
 
 impl Renderer<'_> {
     /// Renders pass `index`: one estimate per pixel, in row-major order.
@@ -32,15 +33,9 @@ impl Renderer<'_> {
     }
 
     fn trace_visible_points(&self, pass: &PassSamples) -> (Vec<EyeResult>, PassStats) {
-        let width = self.settings.width as usize;
-        let pixels = width * self.settings.height as usize;
-        let results: Vec<(EyeResult, PassStats)> = (0..pixels)
-            .into_par_iter()
-            .with_min_len(64)
-            .map(|pixel| trace_eye_path(self, pass, pixel))
-            .collect();
-        let stats = results.iter().map(|(_, s)| *s).sum();
-        (results.into_iter().map(|(r, _)| r).collect(), stats)
+        let pixels = (self.settings.width * self.settings.height) as usize;
+        let empty = EyeResult { radiance: SampledSpectrum::ZERO, point: None };
+        collect_counting(pixels, empty, |pixel| trace_eye_path(self, pass, pixel))
     }
 
     fn trace_photons(&self, pass: &PassSamples) -> (Vec<Photon>, PassStats) {
@@ -60,8 +55,14 @@ mod size_probe {
     #[test]
     fn sizes() {
         use super::*;
-        eprintln!("EyeResult {} VisiblePoint {} Photon {} PixelEstimate {} Bsdf {} PassStats {}",
-            std::mem::size_of::<EyeResult>(), std::mem::size_of::<crate::sppm::renderer::VisiblePoint>(),
-            std::mem::size_of::<Photon>(), std::mem::size_of::<PixelEstimate>(), std::mem::size_of::<crate::materials::Bsdf>(), std::mem::size_of::<PassStats>());
+        eprintln!(
+            "EyeResult {} VisiblePoint {} Photon {} PixelEstimate {} Bsdf {} PassStats {}",
+            std::mem::size_of::<EyeResult>(),
+            std::mem::size_of::<crate::sppm::renderer::VisiblePoint>(),
+            std::mem::size_of::<Photon>(),
+            std::mem::size_of::<PixelEstimate>(),
+            std::mem::size_of::<crate::materials::Bsdf>(),
+            std::mem::size_of::<PassStats>()
+        );
     }
 }

@@ -127,6 +127,35 @@ impl std::ops::Add for PassStats {
     }
 }
 
+/// Pixels (or other items) one parallel task computes together.
+const TASK_ITEMS: usize = 64;
+
+/// `f(i)` for every `i` in `0..count`, computed in parallel tasks that each sum the counts `f`
+/// returns: only the results are stored per item, and sums of counts are the same on any number
+/// of threads.
+pub fn collect_counting<T: Clone + Send>(
+    count: usize,
+    empty: T,
+    f: impl Fn(usize) -> (T, PassStats) + Sync,
+) -> (Vec<T>, PassStats) {
+    use rayon::prelude::*;
+    let mut results = vec![empty; count];
+    let stats = results
+        .par_chunks_mut(TASK_ITEMS)
+        .enumerate()
+        .map(|(task, out)| {
+            let mut stats = PassStats::default();
+            for (i, result) in out.iter_mut().enumerate() {
+                let (value, item_stats) = f(task * TASK_ITEMS + i);
+                *result = value;
+                stats = stats + item_stats;
+            }
+            stats
+        })
+        .sum();
+    (results, stats)
+}
+
 /// Everything a pass reads: the scene, its BVH, how lights are chosen, and the settings.
 pub struct Renderer<'a> {
     pub(super) scene: &'a Scene,

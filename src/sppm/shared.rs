@@ -22,7 +22,7 @@ use rayon::prelude::*;
 
 use super::gather::{estimate, PhotonSet};
 use super::photons::{continue_photon, photon_chunks, start_photon, trace_photon, Photon, PhotonState};
-use super::renderer::{PassSamples, PassStats, PixelEstimate, Renderer};
+use super::renderer::{collect_counting, PassSamples, PassStats, PixelEstimate, Renderer};
 use super::visible::{
     continue_eye_path, start_eye_path, trace_eye_path, with_direct, EyeEnd, EyeResult, EyeState,
 };
@@ -141,31 +141,24 @@ pub fn run_shared_pass(
         let own = own_photons(&shared, &always_valid, photons);
         let own_set = PhotonSet::new(&own, pass.radius);
         let pixels = (frame.settings.width * frame.settings.height) as usize;
-        let results: Vec<(PixelEstimate, PassStats)> = (0..pixels)
-            .into_par_iter()
-            .with_min_len(64)
-            .map(|pixel| {
-                let (eye, common_sum, eye_stats) = match &eyes {
-                    Some((records, _)) => match frame_eye(frame, pass, &records[pixel]) {
-                        (eye, false, s) => (eye, common_sums[pixel], s),
-                        (eye, true, s) => (
-                            eye,
-                            eye.point.map_or([SampledSpectrum::ZERO; 2], |vp| common_set.sum_at(&vp)),
-                            s,
-                        ),
-                    },
-                    None => {
-                        let (eye, s) = trace_eye_path(frame, pass, pixel);
+        let (estimates, eye_stats) = collect_counting(pixels, PixelEstimate::default(), |pixel| {
+            let (eye, common_sum, eye_stats) = match &eyes {
+                Some((records, _)) => match frame_eye(frame, pass, &records[pixel]) {
+                    (eye, false, s) => (eye, common_sums[pixel], s),
+                    (eye, true, s) => {
                         (eye, eye.point.map_or([SampledSpectrum::ZERO; 2], |vp| common_set.sum_at(&vp)), s)
                     }
-                };
-                let own_sum = eye.point.map_or([SampledSpectrum::ZERO; 2], |vp| own_set.sum_at(&vp));
-                let sums = [common_sum[0] + own_sum[0], common_sum[1] + own_sum[1]];
-                (estimate(&eye, sums), eye_stats)
-            })
-            .collect();
-        let frame_stats = *photon_stats + results.iter().map(|(_, s)| *s).sum();
-        let estimates = results.into_iter().map(|(e, _)| e).collect();
+                },
+                None => {
+                    let (eye, s) = trace_eye_path(frame, pass, pixel);
+                    (eye, eye.point.map_or([SampledSpectrum::ZERO; 2], |vp| common_set.sum_at(&vp)), s)
+                }
+            };
+            let own_sum = eye.point.map_or([SampledSpectrum::ZERO; 2], |vp| own_set.sum_at(&vp));
+            let sums = [common_sum[0] + own_sum[0], common_sum[1] + own_sum[1]];
+            (estimate(&eye, sums), eye_stats)
+        });
+        let frame_stats = *photon_stats + eye_stats;
         consume(SharedPassOutput { frame: index, estimates, stats: frame_stats });
     }
     stats
