@@ -100,10 +100,11 @@ pub struct PixelSums {
 ///
 /// White balance: every pixel of a pass shares its wavelengths, so with few passes the estimate
 /// `sum L cmf / p` carries a colour cast common to the whole image (with one wavelength a pass,
-/// about 10% per channel at 32 passes for a grey scene). The film also sums the same estimator for the white illuminant
-/// itself, `white = sum d65 cmf / p`, whose true value is known, and scales each XYZ channel by
-/// `true white / estimated white` (a ratio estimator: consistent, exact for any spectrum
-/// proportional to D65, and additive like every other sum, so merging stays exact).
+/// about 10% per channel at 32 passes for a grey scene). The film also sums the same estimator
+/// for the white illuminant itself, `white = sum d65 cmf / p`, whose true value is known, and
+/// scales each XYZ channel by `true white / estimated white` (a ratio estimator: consistent,
+/// exact for any spectrum proportional to D65, and additive like every other sum, so merging
+/// stays exact).
 #[derive(Clone, Debug)]
 pub struct Film {
     /// Width in pixels.
@@ -317,6 +318,7 @@ impl Film {
 mod tests {
     use super::*;
     use crate::sampling::pass_sample;
+
     /// Adds `passes` passes in which every pixel sees `radiance(lambda)`.
     fn film_of(passes: u64, radiance: impl Fn(f32) -> f32) -> Film {
         let mut film = Film::new(2, 1, FilmMode::Spectral, 0);
