@@ -2,7 +2,7 @@
 //!
 //! A [`Material`] holds the glTF metallic-roughness parameters with spectra; [`Material::bsdf`]
 //! resolves it at the pass's wavelengths into a closed [`Bsdf`] with a value per wavelength
-//! (directions follow the hero wavelength, the only one in a dispersive scene). Where the
+//! (directions and indices follow the hero wavelength). Where the
 //! glTF material mixes lobes (transmission or metallic between 0 and 1), one lobe is chosen by a
 //! random number with its weight as probability, which is unbiased.
 //!
