@@ -1,17 +1,25 @@
 //! Heap accounting: a global allocator that counts the bytes in use and their peak, so that a
 //! render can report its peak memory and the benchmark can measure two modes in one process
-//! (the resident size cannot: the C allocator keeps freed pages).
+//! (the resident size cannot: the allocator keeps freed pages).
+//!
+//! Underneath is mimalloc, not the C library's allocator. Every pass allocates and frees buffers
+//! of megabytes (eye results, photons, the photon grid); glibc serves those with fresh `mmap`s,
+//! so each pass paid page faults and zeroed pages (a tenth of a render's CPU time in the kernel).
+//! mimalloc keeps the pages for the next pass: 160 passes of the caustic box took 14% less
+//! wall time, for about 45 MB more resident memory at 256x192.
 //!
 //! The `caustic` program installs [`CountingAllocator`]; elsewhere (tests, other programs using
 //! the library) nothing is counted and [`peak_mib`] is `None`.
 
-use std::alloc::{GlobalAlloc, Layout, System};
+use std::alloc::{GlobalAlloc, Layout};
 use std::sync::atomic::{AtomicUsize, Ordering::Relaxed};
+
+use mimalloc::MiMalloc;
 
 static IN_USE: AtomicUsize = AtomicUsize::new(0);
 static PEAK: AtomicUsize = AtomicUsize::new(0);
 
-/// The system allocator, counting.
+/// mimalloc, counting.
 pub struct CountingAllocator;
 
 fn grew(bytes: usize) {
@@ -19,11 +27,11 @@ fn grew(bytes: usize) {
     PEAK.fetch_max(now, Relaxed);
 }
 
-// SAFETY: every call goes to the system allocator unchanged; only counters are added.
+// SAFETY: every call goes to mimalloc unchanged; only counters are added.
 unsafe impl GlobalAlloc for CountingAllocator {
     unsafe fn alloc(&self, layout: Layout) -> *mut u8 {
         // SAFETY: the caller's contract is passed on unchanged.
-        let p = unsafe { System.alloc(layout) };
+        let p = unsafe { MiMalloc.alloc(layout) };
         if !p.is_null() {
             grew(layout.size());
         }
@@ -32,7 +40,7 @@ unsafe impl GlobalAlloc for CountingAllocator {
 
     unsafe fn alloc_zeroed(&self, layout: Layout) -> *mut u8 {
         // SAFETY: as above.
-        let p = unsafe { System.alloc_zeroed(layout) };
+        let p = unsafe { MiMalloc.alloc_zeroed(layout) };
         if !p.is_null() {
             grew(layout.size());
         }
@@ -41,13 +49,13 @@ unsafe impl GlobalAlloc for CountingAllocator {
 
     unsafe fn dealloc(&self, ptr: *mut u8, layout: Layout) {
         // SAFETY: as above.
-        unsafe { System.dealloc(ptr, layout) };
+        unsafe { MiMalloc.dealloc(ptr, layout) };
         IN_USE.fetch_sub(layout.size(), Relaxed);
     }
 
     unsafe fn realloc(&self, ptr: *mut u8, layout: Layout, new_size: usize) -> *mut u8 {
         // SAFETY: as above.
-        let p = unsafe { System.realloc(ptr, layout, new_size) };
+        let p = unsafe { MiMalloc.realloc(ptr, layout, new_size) };
         if !p.is_null() {
             IN_USE.fetch_sub(layout.size(), Relaxed);
             grew(new_size);
