@@ -7,7 +7,7 @@
 //! of `K` estimates the Laplacian of the radiance, which the error bound's bias term needs
 //! (Hachisuka, Jarosz & Jensen 2010).
 
-use glam::Vec3;
+use glam::{Vec3, Vec3A};
 use rayon::prelude::*;
 use std::f32::consts::PI;
 
@@ -37,14 +37,10 @@ impl Kernel {
         Kernel { r2, scale, laplacian_scale: -8.0 * scale / r2 }
     }
 
-    /// What `photon` adds at `vp` (kernel-weighted reflected flux, and the same with the
-    /// Laplacian), or `None` when it is out of reach or on the other side; a photon on a surface
-    /// meeting the point's at an edge adds only its edge term, to the second.
-    fn weigh(&self, photon: &Photon, vp: &VisiblePoint) -> Option<[SampledSpectrum; 2]> {
-        let d2 = photon.p.distance_squared(vp.p);
-        if d2 >= self.r2 {
-            return None;
-        }
+    /// What `photon`, at squared distance `d2 < r^2` from `vp`, adds there (kernel-weighted
+    /// reflected flux, and the same with the Laplacian), or `None` when it is on the other side;
+    /// a photon on a surface meeting the point's at an edge adds only its edge term, to the second.
+    fn weigh(&self, photon: &Photon, d2: f32, vp: &VisiblePoint) -> Option<[SampledSpectrum; 2]> {
         let t2 = d2 / self.r2;
         let facing = photon.ng.dot(vp.frame.ng) * vp.frame.ng.dot(vp.wo).signum();
         if facing <= 0.0 {
@@ -94,9 +90,12 @@ fn within((lo, hi): (Vec3, Vec3), p: Vec3) -> bool {
 }
 
 /// Photons bucketed for gathering at one radius (a copy, sorted by bucket, so that a gather
-/// reads each bucket's photons from consecutive memory).
+/// reads each bucket's photons from consecutive memory). Their positions are kept apart as well:
+/// most photons of the cells around a point are out of reach, and the distance test then reads
+/// 16 bytes a photon instead of a whole photon.
 pub struct PhotonSet {
     sorted: Vec<Photon>,
+    positions: Vec<Vec3A>,
     grid: PhotonGrid,
     reach: Option<(Vec3, Vec3)>,
     kernel: Kernel,
@@ -107,9 +106,10 @@ impl PhotonSet {
     pub fn new(photons: &[Photon], radius: f32) -> Self {
         let positions: Vec<Vec3> = photons.par_iter().with_min_len(4096).map(|p| p.p).collect();
         let (grid, order) = PhotonGrid::build(&positions, radius);
-        let sorted = order.par_iter().with_min_len(4096).map(|&i| photons[i as usize]).collect();
+        let sorted: Vec<Photon> = order.par_iter().with_min_len(4096).map(|&i| photons[i as usize]).collect();
         let reach = reach(positions.iter().copied(), radius);
-        PhotonSet { sorted, grid, reach, kernel: Kernel::new(radius) }
+        let positions = sorted.par_iter().with_min_len(4096).map(|p| Vec3A::from(p.p)).collect();
+        PhotonSet { sorted, positions, grid, reach, kernel: Kernel::new(radius) }
     }
 
     /// The kernel-weighted sum of the photons' reflected flux at `vp`, and the same with the
@@ -117,9 +117,14 @@ impl PhotonSet {
     pub fn sum_at(&self, vp: &VisiblePoint) -> [SampledSpectrum; 2] {
         let mut sums = [SampledSpectrum::ZERO; 2];
         if self.reach.is_some_and(|r| within(r, vp.p)) {
+            let p = Vec3A::from(vp.p);
             self.grid.for_each_near(vp.p, |range| {
-                for photon in &self.sorted[range] {
-                    if let Some([k, l]) = self.kernel.weigh(photon, vp) {
+                for (i, position) in range.clone().zip(&self.positions[range]) {
+                    let d2 = position.distance_squared(p);
+                    if d2 >= self.kernel.r2 {
+                        continue;
+                    }
+                    if let Some([k, l]) = self.kernel.weigh(&self.sorted[i], d2, vp) {
                         sums = [sums[0] + k, sums[1] + l];
                     }
                 }

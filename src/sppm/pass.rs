@@ -50,19 +50,3 @@ impl Renderer<'_> {
         (chunks.into_iter().flat_map(|(p, _)| p).collect(), stats)
     }
 }
-#[cfg(test)]
-mod size_probe {
-    #[test]
-    fn sizes() {
-        use super::*;
-        eprintln!(
-            "EyeResult {} VisiblePoint {} Photon {} PixelEstimate {} Bsdf {} PassStats {}",
-            std::mem::size_of::<EyeResult>(),
-            std::mem::size_of::<crate::sppm::renderer::VisiblePoint>(),
-            std::mem::size_of::<Photon>(),
-            std::mem::size_of::<PixelEstimate>(),
-            std::mem::size_of::<crate::materials::Bsdf>(),
-            std::mem::size_of::<PassStats>()
-        );
-    }
-}
