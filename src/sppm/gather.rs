@@ -37,20 +37,40 @@ impl Kernel {
         Kernel { r2, scale, laplacian_scale: -8.0 * scale / r2 }
     }
 
-    /// What `photon`, at squared distance `d2 < r^2` from `vp`, adds there (kernel-weighted
-    /// reflected flux, and the same with the Laplacian), or `None` when it is on the other side;
-    /// a photon on a surface meeting the point's at an edge adds only its edge term, to the second.
-    fn weigh(&self, photon: &Photon, d2: f32, vp: &VisiblePoint) -> Option<[SampledSpectrum; 2]> {
+    /// What `photon`, at squared distance `d2 < r^2` from `vp`, adds there: kernel-weighted
+    /// reflected flux and the same with the Laplacian; or, for a photon on a surface meeting the
+    /// point's at an edge, its edge term and the kernel mass the edge cuts off.
+    fn weigh(&self, photon: &Photon, d2: f32, vp: &VisiblePoint) -> PhotonSums {
         let t2 = d2 / self.r2;
         let facing = photon.ng.dot(vp.frame.ng) * vp.frame.ng.dot(vp.wo).signum();
         if facing <= 0.0 {
-            return (facing > -EDGE_COSINE).then(|| [SampledSpectrum::ZERO, self.edge_term(photon, vp, t2)]);
+            if facing <= -EDGE_COSINE {
+                return PhotonSums::default();
+            }
+            let laplacian = self.edge_term(photon, vp, t2);
+            return PhotonSums { laplacian, cut: self.cut_by(photon, vp), ..PhotonSums::default() };
         }
         let weighted = pair_flux(photon, vp) * vp.bsdf.eval(vp.frame.n, vp.wo, photon.wi);
-        Some([
-            weighted * self.scale * (1.0 - t2) * (1.0 - t2),
-            weighted * self.laplacian_scale * (1.0 - 2.0 * t2),
-        ])
+        PhotonSums {
+            kernel: weighted * self.scale * (1.0 - t2) * (1.0 - t2),
+            laplacian: weighted * self.laplacian_scale * (1.0 - 2.0 * t2),
+            cut: Vec3::ZERO,
+        }
+    }
+
+    /// The kernel mass that the plane of `photon`'s surface cuts off the disc around `vp` (in
+    /// `vp`'s plane), filed under the axis its normal is closest to.
+    fn cut_by(&self, photon: &Photon, vp: &VisiblePoint) -> Vec3 {
+        let n = vp.frame.ng;
+        let in_plane = photon.ng - photon.ng.dot(n) * n;
+        let sine = in_plane.length();
+        if sine < 0.5 {
+            return Vec3::ZERO;
+        }
+        let distance = (vp.p - photon.p).dot(photon.ng).abs() / sine;
+        let mass = kernel_mass_beyond(distance / self.r2.sqrt());
+        let axis = photon.ng.abs().max_position();
+        Vec3::AXES[axis] * mass
     }
 
     /// A photon on a surface meeting the visible point's at an edge stands for the photons the
@@ -112,10 +132,9 @@ impl PhotonSet {
         PhotonSet { sorted, positions, grid, reach, kernel: Kernel::new(radius) }
     }
 
-    /// The kernel-weighted sum of the photons' reflected flux at `vp`, and the same with the
-    /// kernel's Laplacian, before the path throughput.
-    pub fn sum_at(&self, vp: &VisiblePoint) -> [SampledSpectrum; 2] {
-        let mut sums = [SampledSpectrum::ZERO; 2];
+    /// What the photons near `vp` add up to there, before the path throughput.
+    pub fn sum_at(&self, vp: &VisiblePoint) -> PhotonSums {
+        let mut sums = PhotonSums::default();
         if self.reach.is_some_and(|r| within(r, vp.p)) {
             let p = Vec3A::from(vp.p);
             self.grid.for_each_near(vp.p, |range| {
@@ -124,9 +143,7 @@ impl PhotonSet {
                     if d2 >= self.kernel.r2 {
                         continue;
                     }
-                    if let Some([k, l]) = self.kernel.weigh(&self.sorted[i], d2, vp) {
-                        sums = [sums[0] + k, sums[1] + l];
-                    }
+                    sums = sums + self.kernel.weigh(&self.sorted[i], d2, vp);
                 }
             });
         }
@@ -135,9 +152,12 @@ impl PhotonSet {
 }
 
 /// A pixel's estimate from its eye result and the photon sums at its visible point.
-pub fn estimate(eye: &EyeResult, [sum, laplacian]: [SampledSpectrum; 2]) -> PixelEstimate {
+pub fn estimate(eye: &EyeResult, sums: PhotonSums) -> PixelEstimate {
     match eye.point {
-        Some(vp) => PixelEstimate { radiance: eye.radiance + vp.beta * sum, laplacian: vp.beta * laplacian },
+        Some(vp) => PixelEstimate {
+            radiance: eye.radiance + vp.beta * sums.kernel / sums.kernel_mass_within(),
+            laplacian: vp.beta * sums.laplacian,
+        },
         None => PixelEstimate { radiance: eye.radiance, laplacian: SampledSpectrum::ZERO },
     }
 }
@@ -146,6 +166,88 @@ pub fn estimate(eye: &EyeResult, [sum, laplacian]: [SampledSpectrum; 2]) -> Pixe
 pub fn gather(eye: &[EyeResult], set: &PhotonSet) -> Vec<PixelEstimate> {
     eye.par_iter()
         .with_min_len(64)
-        .map(|e| estimate(e, e.point.map_or([SampledSpectrum::ZERO; 2], |vp| set.sum_at(&vp))))
+        .map(|e| estimate(e, e.point.map_or(PhotonSums::default(), |vp| set.sum_at(&vp))))
         .collect()
+}
+
+/// What the photons near a visible point add up to, before the path throughput.
+///
+/// Near an edge of its surface (where a wall meets the floor, or a table top ends) the gather
+/// disc reaches past the surface, where no photons of it land: the kernel sum alone would
+/// darken every room's corners by up to half. A photon on a surface meeting the point's at an
+/// edge (a wall's, seen from the floor) gives that surface's plane, and so the line where it cuts
+/// the disc; the sum is divided by the kernel mass left within the disc (renormalised kernel
+/// density estimation). The cut mass is kept per axis of the cutting surface's normal, the
+/// largest of each, so that a corner's two walls both count and sums over photon sets merge
+/// in any order (frames sharing photons sum two sets).
+#[derive(Clone, Copy, Debug, Default)]
+pub struct PhotonSums {
+    /// Kernel-weighted reflected flux.
+    pub kernel: SampledSpectrum,
+    /// The same with the kernel's Laplacian, and the edge terms.
+    pub laplacian: SampledSpectrum,
+    /// Kernel mass cut off by edges, per axis of the cutting surface's normal.
+    pub cut: Vec3,
+}
+
+/// The least kernel mass an estimate is divided by (where edges cut off more, as at the tip of
+/// a sharp wedge, they are not trusted to be straight).
+const LEAST_MASS_WITHIN: f32 = 0.25;
+
+impl PhotonSums {
+    /// The kernel mass within the surface.
+    fn kernel_mass_within(&self) -> f32 {
+        (1.0 - self.cut.element_sum()).max(LEAST_MASS_WITHIN)
+    }
+}
+
+impl std::ops::Add for PhotonSums {
+    type Output = PhotonSums;
+    fn add(self, o: PhotonSums) -> PhotonSums {
+        PhotonSums { kernel: self.kernel + o.kernel, laplacian: self.laplacian + o.laplacian, cut: self.cut.max(o.cut) }
+    }
+}
+
+/// The biweight kernel's mass beyond a line at distance `s` radii from its centre:
+/// `M(s) = 16 / (5 pi) * integral from s to 1 of (1 - t^2)^(5/2) dt` (the kernel's marginal along
+/// the line's normal), in closed form with `t = sin(phi)`.
+pub fn kernel_mass_beyond(s: f32) -> f32 {
+    if s >= 1.0 {
+        return 0.0;
+    }
+    let phi = s.max(0.0).asin();
+    let cos6_integral = 5.0 * phi / 16.0
+        + 15.0 / 64.0 * (2.0 * phi).sin()
+        + 3.0 / 64.0 * (4.0 * phi).sin()
+        + (6.0 * phi).sin() / 192.0;
+    (0.5 - 16.0 / (5.0 * PI) * cos6_integral).max(0.0)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// The closed form against the biweight summed over a fine grid of the disc beyond the line
+    /// `x = s` (radius 1): within 1e-4 at every distance, half the mass at the centre, none at 1.
+    #[test]
+    fn kernel_mass_beyond_a_line_matches_the_kernel_summed_there() {
+        let n = 2000;
+        let cell = 2.0 / n as f64;
+        for s in [0.0, 0.1, 0.3, 0.5, 0.7, 0.9, 1.0] {
+            let mut mass = 0.0;
+            for i in 0..n {
+                for j in 0..n {
+                    let (x, y) = (-1.0 + (i as f64 + 0.5) * cell, -1.0 + (j as f64 + 0.5) * cell);
+                    let t2 = x * x + y * y;
+                    if x > s && t2 < 1.0 {
+                        mass += 3.0 / std::f64::consts::PI * (1.0 - t2) * (1.0 - t2) * cell * cell;
+                    }
+                }
+            }
+            let closed = f64::from(kernel_mass_beyond(s as f32));
+            assert!((closed - mass).abs() < 1e-4, "s = {s}: closed form {closed}, summed {mass}");
+        }
+        assert!((kernel_mass_beyond(0.0) - 0.5).abs() < 1e-6);
+        assert_eq!(kernel_mass_beyond(1.0), 0.0);
+    }
 }

@@ -20,7 +20,7 @@ use std::ops::Range;
 use glam::Vec3;
 use rayon::prelude::*;
 
-use super::gather::{estimate, PhotonSet};
+use super::gather::{estimate, PhotonSet, PhotonSums};
 use super::photons::{continue_photon, photon_chunks, start_photon, trace_photon, Photon, PhotonState};
 use super::renderer::{collect_counting, PassSamples, PassStats, PixelEstimate, Renderer};
 use super::visible::{
@@ -126,13 +126,13 @@ pub fn run_shared_pass(
     let common = common_photons(&shared, &always_valid);
     let common_set = PhotonSet::new(&common, pass.radius);
     let eyes = share_eyes.then(|| trace_shared_eyes(statics, pass, swept));
-    let common_sums: Vec<[SampledSpectrum; 2]> = match &eyes {
+    let common_sums: Vec<PhotonSums> = match &eyes {
         Some((records, eye_stats)) => {
             stats = stats + *eye_stats;
             records
                 .par_iter()
                 .with_min_len(64)
-                .map(|r| r.end.result.point.map_or([SampledSpectrum::ZERO; 2], |vp| common_set.sum_at(&vp)))
+                .map(|r| r.end.result.point.map_or(PhotonSums::default(), |vp| common_set.sum_at(&vp)))
                 .collect()
         }
         None => Vec::new(),
@@ -146,17 +146,16 @@ pub fn run_shared_pass(
                 Some((records, _)) => match frame_eye(frame, pass, &records[pixel]) {
                     (eye, false, s) => (eye, common_sums[pixel], s),
                     (eye, true, s) => {
-                        (eye, eye.point.map_or([SampledSpectrum::ZERO; 2], |vp| common_set.sum_at(&vp)), s)
+                        (eye, eye.point.map_or(PhotonSums::default(), |vp| common_set.sum_at(&vp)), s)
                     }
                 },
                 None => {
                     let (eye, s) = trace_eye_path(frame, pass, pixel);
-                    (eye, eye.point.map_or([SampledSpectrum::ZERO; 2], |vp| common_set.sum_at(&vp)), s)
+                    (eye, eye.point.map_or(PhotonSums::default(), |vp| common_set.sum_at(&vp)), s)
                 }
             };
-            let own_sum = eye.point.map_or([SampledSpectrum::ZERO; 2], |vp| own_set.sum_at(&vp));
-            let sums = [common_sum[0] + own_sum[0], common_sum[1] + own_sum[1]];
-            (estimate(&eye, sums), eye_stats)
+            let own_sum = eye.point.map_or(PhotonSums::default(), |vp| own_set.sum_at(&vp));
+            (estimate(&eye, common_sum + own_sum), eye_stats)
         });
         let frame_stats = *photon_stats + eye_stats;
         consume(SharedPassOutput { frame: index, estimates, stats: frame_stats });
