@@ -20,7 +20,7 @@ pub use crate::progress::ProgressStyle;
 use crate::sampling::pass_time_sample;
 use crate::scene::description::{LensSettings, Shutter};
 use crate::scene::pose::lens;
-use crate::scene::{Description, Prepared, Scene, TimeRange};
+use crate::scene::{Description, Prepared, Scene, TimeRange, DEFAULT_RADIUS_FRACTION};
 use crate::sppm::{run_shared_pass, PassSamples, PassStats, PixelEstimate, Renderer, SppmSettings};
 
 /// Set when the user asks the render to stop (Ctrl-C, SIGTERM): the pass in flight finishes,
@@ -178,7 +178,7 @@ const DEFAULT_RADIUS_PHOTONS: f64 = 49_152.0;
 /// with pixels times photons within reach, take 89% of a full-HD pass with a million photons.
 pub fn default_radius(scene: &Scene, photons_per_pass: usize) -> f64 {
     let shrink = (DEFAULT_RADIUS_PHOTONS / photons_per_pass.max(1) as f64).powf(1.0 / 6.0).min(1.0);
-    f64::from(scene.bounding_sphere().radius) * 0.04 * shrink
+    f64::from(scene.bounding_sphere().radius) * DEFAULT_RADIUS_FRACTION * shrink
 }
 
 /// Loads the scene description and prints its warnings to stderr.

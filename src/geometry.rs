@@ -6,7 +6,7 @@
 //! Near the origin, where ULPs vanish, the offset follows the size of the coordinates the point
 //! was computed from instead.
 
-use glam::Vec3;
+use glam::{IVec3, Vec3};
 
 /// A ray origin moved off the surface at `p` (geometric normal `ng`) to the side of `direction`,
 /// by a few ULPs of `p`'s coordinates (Wächter & Binder 2019, "A Fast and Robust Method for
@@ -31,6 +31,14 @@ pub fn offset_origin(p: Vec3, ng: Vec3, direction: Vec3, scale: f32) -> Vec3 {
         }
     };
     Vec3::new(offset(p.x, n.x), offset(p.y, n.y), offset(p.z, n.z))
+}
+
+/// The bucket of grid cell `cell` among `buckets` (Teschner et al. 2003's spatial hash).
+pub fn hash_cell(cell: IVec3, buckets: usize) -> usize {
+    let h = (cell.x as u32).wrapping_mul(73_856_093)
+        ^ (cell.y as u32).wrapping_mul(19_349_663)
+        ^ (cell.z as u32).wrapping_mul(83_492_791);
+    h as usize % buckets
 }
 
 /// Whether the ray from `origin` along `direction` meets the box `[lo, hi]` before `t_max`

@@ -65,3 +65,43 @@ fn rgb_albedo_round_trips() {
         }
     }
 }
+
+/// A white floor ends in the open at x = 1, under a large thin glass pane lit straight down by a
+/// sun: the floor is lit by photons alone (through glass). The camera, under the pane, looks down
+/// at the floor's edge in the middle of the image (64 pixels a unit; gather radius 0.1 at the
+/// first pass, 0.056 at the 32nd). The gather disc of a point near the edge reaches past it,
+/// where no photons land; the gather renormalises its kernel by the open edge, so the column
+/// beside the edge must read within 6% of the floor 4 to 12 pixels in (measured 0.01% apart;
+/// without the renormalisation, 38% low), and the columns past the edge must be black.
+#[test]
+fn a_floors_open_edge_is_not_darkened() {
+    let dir = tempfile::tempdir().unwrap();
+    let mut gltf = GltfBuilder::default();
+    let white = gltf.material(diffuse([0.8, 0.8, 0.8]));
+    let [a, b, c, d] = [[-1.0, 0.0, -1.0], [-1.0, 0.0, 1.0], [1.0, 0.0, 1.0], [1.0, 0.0, -1.0]];
+    gltf.mesh("Floor", &[[a, b, c], [a, c, d]], white);
+    let glass = gltf.material(json!({"pbrMetallicRoughness": {"baseColorFactor": [1.0, 1.0, 1.0, 1.0], "metallicFactor": 0.0, "roughnessFactor": 0.0},
+        "extensions": {"KHR_materials_transmission": {"transmissionFactor": 1.0}}}));
+    gltf.quad_y("Pane", 0.5, 3.0, true, glass);
+    gltf.light(json!({"type": "directional", "intensity": std::f32::consts::PI * 683.0, "color": [1.0, 1.0, 1.0]}), [0.0, 10.0, 0.0], [0.0, -1.0, 0.0]);
+    gltf.camera([1.0, 0.4, 0.0], [0.0, -1.0, 0.0], 2.0 * 0.625f32.atan());
+    gltf.scene_extras(json!({"resolution": [32, 32]}));
+    let path = gltf.write(dir.path(), "open_edge");
+    let mut s = settings(&path, dir.path(), 32);
+    s.photons = Some(200_000);
+    s.radius = Some(0.1);
+    let image = render(&s, 2);
+    let column = |x: usize| image.luminance(x, x + 1, 0, 32);
+    let lit: Vec<usize> = (0..32).filter(|&x| column(x) > 0.05).collect();
+    assert_eq!(lit.len(), 16, "the floor should fill half the columns: {:?}", (0..32).map(column).collect::<Vec<_>>());
+    let toward_edge: Box<dyn Fn(usize) -> usize> =
+        if lit[0] == 0 { Box::new(|k| 15 - k) } else { Box::new(|k| 16 + k) };
+    let interior = (4..12).map(|k| column(toward_edge(k))).sum::<f64>() / 8.0;
+    let beside_edge = column(toward_edge(0));
+    assert!(
+        (beside_edge / interior - 1.0).abs() < 0.06,
+        "the column beside the floor's edge reads {beside_edge}, the floor further in {interior}"
+    );
+    let past_edge = if lit[0] == 0 { column(16) } else { column(15) };
+    assert!(past_edge < 0.01 * interior, "past the edge: {past_edge}");
+}

@@ -8,6 +8,7 @@
 
 pub mod animation;
 pub mod description;
+mod edges;
 pub mod extras;
 mod gltf_checks;
 mod gltf_loader;
@@ -27,6 +28,7 @@ use crate::materials::{Material, ShadingFrame};
 use crate::spectrum::{SampledSpectrum, Wavelengths};
 
 pub use description::Description;
+pub use edges::OpenEdges;
 pub use pose::{Prepared, TimeRange};
 
 /// A scene that cannot be loaded: the file and what is wrong with it.
@@ -38,6 +40,10 @@ pub struct SceneError {
     /// What is wrong, naming the mesh, node or field.
     pub message: String,
 }
+
+/// The default first gather radius, as a fraction of the radius of the sphere around the scene
+/// (smaller with more photons than pixels: `frames::default_radius`).
+pub const DEFAULT_RADIUS_FRACTION: f64 = 0.04;
 
 /// One triangle: indices into the vertex arrays and its material.
 #[derive(Clone, Copy, Debug)]
@@ -116,6 +122,8 @@ pub struct Scene {
     pub fixed_triangle_lights: Arc<Vec<u32>>,
     /// The same for each moving triangle.
     pub moving_triangle_lights: Vec<u32>,
+    /// The open edges of the fixed triangles (where surfaces end in the open).
+    pub open_edges: Arc<OpenEdges>,
     /// Indices in `lights` of the distant lights a ray leaving the scene can see.
     pub distant_lights: Vec<usize>,
     /// Indices in `lights` of the lights that move within the prepared range.

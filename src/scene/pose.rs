@@ -10,7 +10,7 @@ use std::sync::Arc;
 use glam::{Mat3, Mat4, Vec3};
 
 use super::description::{Description, Lens, LensSettings, MeshInstance, PunctualKind, PunctualLight};
-use super::{bounding_sphere, Geometry, Scene, NOT_A_LIGHT};
+use super::{bounding_sphere, Geometry, OpenEdges, Scene, DEFAULT_RADIUS_FRACTION, NOT_A_LIGHT};
 use crate::accel::Bvh;
 use crate::camera::Camera;
 use crate::lights::{BoundingSphere, Light};
@@ -42,6 +42,7 @@ pub struct Prepared {
     fixed: Arc<Geometry>,
     fixed_lights: Vec<Light>,
     fixed_triangle_lights: Arc<Vec<u32>>,
+    open_edges: Arc<OpenEdges>,
     moving_meshes: Vec<usize>,
     moving_lights: Vec<usize>,
     camera_moves: bool,
@@ -162,6 +163,7 @@ impl Prepared {
         let swept =
             moving_meshes.iter().filter_map(|&m| swept_bounds(&description, &description.meshes[m], range));
         let sphere = bounding_sphere(fixed.bounds().into_iter().chain(swept));
+        let open_edges = Arc::new(OpenEdges::of(&fixed, sphere.radius * DEFAULT_RADIUS_FRACTION as f32));
         Prepared {
             camera_moves: moves(description.camera.node),
             materials: Arc::new(description.materials.clone()),
@@ -170,6 +172,7 @@ impl Prepared {
             fixed: Arc::new(fixed),
             fixed_lights,
             fixed_triangle_lights: Arc::new(fixed_triangle_lights),
+            open_edges,
             moving_meshes,
             moving_lights,
             lens,
@@ -251,6 +254,7 @@ impl Prepared {
             lights,
             fixed_triangle_lights: Arc::clone(&self.fixed_triangle_lights),
             moving_triangle_lights,
+            open_edges: Arc::clone(&self.open_edges),
             distant_lights,
             moving_lights,
             camera: Camera::from_node(camera_world, d.camera.yfov).with_lens(self.lens),

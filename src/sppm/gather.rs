@@ -8,6 +8,7 @@
 //! (Hachisuka, Jarosz & Jensen 2010).
 
 use glam::{Vec3, Vec3A};
+use std::sync::Arc;
 use rayon::prelude::*;
 use std::f32::consts::PI;
 
@@ -16,10 +17,14 @@ use super::photons::Photon;
 use super::renderer::{PixelEstimate, VisiblePoint};
 use super::visible::EyeResult;
 use crate::error::K2;
+use crate::scene::OpenEdges;
 use crate::spectrum::{SampledSpectrum, LANES};
 
 /// Photons on surfaces whose normal is within this cosine of perpendicular to the visible
-/// point's (past it on the far side: the back of a thin wall) mark an edge.
+/// point's, on either side, mark an edge (a wall seen from the floor). Those facing more toward
+/// it are gathered; those facing more away lie behind it (the back of a thin wall). Walls meeting
+/// at right angles after a rotation can face each other by +-1e-7, so perpendicular must not be
+/// the boundary between gathered and not.
 const EDGE_COSINE: f32 = 0.5;
 
 /// The biweight kernel of one radius and its Laplacian.
@@ -43,7 +48,7 @@ impl Kernel {
     fn weigh(&self, photon: &Photon, d2: f32, vp: &VisiblePoint) -> PhotonSums {
         let t2 = d2 / self.r2;
         let facing = photon.ng.dot(vp.frame.ng) * vp.frame.ng.dot(vp.wo).signum();
-        if facing <= 0.0 {
+        if facing < EDGE_COSINE {
             if facing <= -EDGE_COSINE {
                 return PhotonSums::default();
             }
@@ -119,17 +124,19 @@ pub struct PhotonSet {
     grid: PhotonGrid,
     reach: Option<(Vec3, Vec3)>,
     kernel: Kernel,
+    open_edges: Arc<OpenEdges>,
 }
 
 impl PhotonSet {
-    /// Buckets `photons` for gathers of radius `radius`.
-    pub fn new(photons: &[Photon], radius: f32) -> Self {
+    /// Buckets `photons` for gathers of radius `radius` in a scene whose surfaces end at
+    /// `open_edges`.
+    pub fn new(photons: &[Photon], radius: f32, open_edges: &Arc<OpenEdges>) -> Self {
         let positions: Vec<Vec3> = photons.par_iter().with_min_len(4096).map(|p| p.p).collect();
         let (grid, order) = PhotonGrid::build(&positions, radius);
         let sorted: Vec<Photon> = order.par_iter().with_min_len(4096).map(|&i| photons[i as usize]).collect();
         let reach = reach(positions.iter().copied(), radius);
         let positions = sorted.par_iter().with_min_len(4096).map(|p| Vec3A::from(p.p)).collect();
-        PhotonSet { sorted, positions, grid, reach, kernel: Kernel::new(radius) }
+        PhotonSet { sorted, positions, grid, reach, kernel: Kernel::new(radius), open_edges: Arc::clone(open_edges) }
     }
 
     /// What the photons near `vp` add up to there, before the path throughput.
@@ -146,6 +153,11 @@ impl PhotonSet {
                     sums = sums + self.kernel.weigh(&self.sorted[i], d2, vp);
                 }
             });
+        }
+        if sums.kernel != SampledSpectrum::ZERO {
+            let radius = self.kernel.r2.sqrt();
+            let edges = self.open_edges.distances(vp.p, vp.frame.ng, radius);
+            sums.cut = sums.cut.max(edges.map(|d| kernel_mass_beyond(d / radius)));
         }
         sums
     }

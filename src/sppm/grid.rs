@@ -6,6 +6,8 @@
 //! caller keeps its photons in that order, so a bucket's photons lie side by side in memory.
 
 use glam::{IVec3, Vec3};
+
+use crate::geometry::hash_cell;
 use rayon::prelude::*;
 
 /// Buckets of hashed grid cells over photons sorted by bucket: bucket `b` holds the sorted
@@ -13,13 +15,6 @@ use rayon::prelude::*;
 pub struct PhotonGrid {
     cell_size: f32,
     bucket_start: Vec<u32>,
-}
-
-fn hash_cell(cell: IVec3, buckets: usize) -> usize {
-    let h = (cell.x as u32).wrapping_mul(73_856_093)
-        ^ (cell.y as u32).wrapping_mul(19_349_663)
-        ^ (cell.z as u32).wrapping_mul(83_492_791);
-    h as usize % buckets
 }
 
 impl PhotonGrid {

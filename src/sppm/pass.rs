@@ -25,7 +25,7 @@ impl Renderer<'_> {
         let eye_ns = lap();
         let (photons, photon_stats) = self.trace_photons(&pass);
         let photon_ns = lap();
-        let set = PhotonSet::new(&photons, pass.radius);
+        let set = PhotonSet::new(&photons, pass.radius, &self.scene.open_edges);
         let grid_ns = lap();
         let estimates = gather(&points, &set);
         let stages = PassStats { stage_ns: [eye_ns, photon_ns, grid_ns, lap()], ..PassStats::default() };

@@ -124,7 +124,7 @@ pub fn run_shared_pass(
         .map(|r| checked.iter().map(|(f, _)| f.valid[r]).min().unwrap_or(0))
         .collect();
     let common = common_photons(&shared, &always_valid);
-    let common_set = PhotonSet::new(&common, pass.radius);
+    let common_set = PhotonSet::new(&common, pass.radius, &statics.scene.open_edges);
     let eyes = share_eyes.then(|| trace_shared_eyes(statics, pass, swept));
     let common_sums: Vec<PhotonSums> = match &eyes {
         Some((records, eye_stats)) => {
@@ -139,7 +139,7 @@ pub fn run_shared_pass(
     };
     for (index, (frame, (photons, photon_stats))) in frames.iter().zip(&checked).enumerate() {
         let own = own_photons(&shared, &always_valid, photons);
-        let own_set = PhotonSet::new(&own, pass.radius);
+        let own_set = PhotonSet::new(&own, pass.radius, &frame.scene.open_edges);
         let pixels = (frame.settings.width * frame.settings.height) as usize;
         let (estimates, eye_stats) = collect_counting(pixels, PixelEstimate::default(), |pixel| {
             let (eye, common_sum, eye_stats) = match &eyes {
