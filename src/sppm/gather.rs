@@ -6,6 +6,10 @@
 //! the gather position is `-8 * 3 / (pi r^4) (1 - 2 t^2)`; the same photon sum with it in place
 //! of `K` estimates the Laplacian of the radiance, which the error bound's bias term needs
 //! (Hachisuka, Jarosz & Jensen 2010).
+//!
+//! Where the disc reaches past the end of the visible point's surface, the sum is divided by the
+//! kernel mass left on the surface ([`PhotonSums`]): the ends are found from photons on surfaces
+//! meeting the point's, and from the scene's open edges ([`crate::scene::OpenEdges`]).
 
 use glam::{Vec3, Vec3A};
 use std::sync::Arc;
