@@ -83,7 +83,11 @@ fn a_floors_open_edge_is_not_darkened() {
     let glass = gltf.material(json!({"pbrMetallicRoughness": {"baseColorFactor": [1.0, 1.0, 1.0, 1.0], "metallicFactor": 0.0, "roughnessFactor": 0.0},
         "extensions": {"KHR_materials_transmission": {"transmissionFactor": 1.0}}}));
     gltf.quad_y("Pane", 0.5, 3.0, true, glass);
-    gltf.light(json!({"type": "directional", "intensity": std::f32::consts::PI * 683.0, "color": [1.0, 1.0, 1.0]}), [0.0, 10.0, 0.0], [0.0, -1.0, 0.0]);
+    gltf.light(
+        json!({"type": "directional", "intensity": std::f32::consts::PI * 683.0, "color": [1.0, 1.0, 1.0]}),
+        [0.0, 10.0, 0.0],
+        [0.0, -1.0, 0.0],
+    );
     gltf.camera([1.0, 0.4, 0.0], [0.0, -1.0, 0.0], 2.0 * 0.625f32.atan());
     gltf.scene_extras(json!({"resolution": [32, 32]}));
     let path = gltf.write(dir.path(), "open_edge");
@@ -93,7 +97,12 @@ fn a_floors_open_edge_is_not_darkened() {
     let image = render(&s, 2);
     let column = |x: usize| image.luminance(x, x + 1, 0, 32);
     let lit: Vec<usize> = (0..32).filter(|&x| column(x) > 0.05).collect();
-    assert_eq!(lit.len(), 16, "the floor should fill half the columns: {:?}", (0..32).map(column).collect::<Vec<_>>());
+    assert_eq!(
+        lit.len(),
+        16,
+        "the floor should fill half the columns: {:?}",
+        (0..32).map(column).collect::<Vec<_>>()
+    );
     let toward_edge: Box<dyn Fn(usize) -> usize> =
         if lit[0] == 0 { Box::new(|k| 15 - k) } else { Box::new(|k| 16 + k) };
     let interior = (4..12).map(|k| column(toward_edge(k))).sum::<f64>() / 8.0;

@@ -94,7 +94,8 @@ impl OpenEdges {
             for y in lo.y..=hi.y {
                 for x in lo.x..=hi.x {
                     let b = hash_cell(IVec3::new(x, y, z), buckets);
-                    let listed = &self.entries[self.bucket_start[b] as usize..self.bucket_start[b + 1] as usize];
+                    let listed =
+                        &self.entries[self.bucket_start[b] as usize..self.bucket_start[b + 1] as usize];
                     for &e in listed {
                         let edge = &self.edges[e as usize];
                         if let Some(d) = edge.distance_within_surface(p, n, reach) {

@@ -12,9 +12,9 @@
 //! meeting the point's, and from the scene's open edges ([`crate::scene::OpenEdges`]).
 
 use glam::{Vec3, Vec3A};
-use std::sync::Arc;
 use rayon::prelude::*;
 use std::f32::consts::PI;
+use std::sync::Arc;
 
 use super::grid::PhotonGrid;
 use super::photons::Photon;
@@ -140,7 +140,14 @@ impl PhotonSet {
         let sorted: Vec<Photon> = order.par_iter().with_min_len(4096).map(|&i| photons[i as usize]).collect();
         let reach = reach(positions.iter().copied(), radius);
         let positions = sorted.par_iter().with_min_len(4096).map(|p| Vec3A::from(p.p)).collect();
-        PhotonSet { sorted, positions, grid, reach, kernel: Kernel::new(radius), open_edges: Arc::clone(open_edges) }
+        PhotonSet {
+            sorted,
+            positions,
+            grid,
+            reach,
+            kernel: Kernel::new(radius),
+            open_edges: Arc::clone(open_edges),
+        }
     }
 
     /// What the photons near `vp` add up to there, before the path throughput.
@@ -220,7 +227,11 @@ impl PhotonSums {
 impl std::ops::Add for PhotonSums {
     type Output = PhotonSums;
     fn add(self, o: PhotonSums) -> PhotonSums {
-        PhotonSums { kernel: self.kernel + o.kernel, laplacian: self.laplacian + o.laplacian, cut: self.cut.max(o.cut) }
+        PhotonSums {
+            kernel: self.kernel + o.kernel,
+            laplacian: self.laplacian + o.laplacian,
+            cut: self.cut.max(o.cut),
+        }
     }
 }
 
