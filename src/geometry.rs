@@ -41,6 +41,26 @@ pub fn hash_cell(cell: IVec3, buckets: usize) -> usize {
     h as usize % buckets
 }
 
+/// Items sorted by bucket with a counting sort, in item order within a bucket (deterministic):
+/// `bucket_of[i]` is item `i`'s bucket among `buckets`. Gives where each bucket starts in the
+/// sorted order (`buckets + 1` entries) and the item at each sorted place.
+pub fn sort_into_buckets(bucket_of: &[u32], buckets: usize) -> (Vec<u32>, Vec<u32>) {
+    let mut bucket_start = vec![0u32; buckets + 1];
+    for &b in bucket_of {
+        bucket_start[b as usize + 1] += 1;
+    }
+    for i in 1..=buckets {
+        bucket_start[i] += bucket_start[i - 1];
+    }
+    let mut next = bucket_start.clone();
+    let mut order = vec![0u32; bucket_of.len()];
+    for (i, &b) in bucket_of.iter().enumerate() {
+        order[next[b as usize] as usize] = i as u32;
+        next[b as usize] += 1;
+    }
+    (bucket_start, order)
+}
+
 /// Whether the ray from `origin` along `direction` meets the box `[lo, hi]` before `t_max`
 /// (the slab test; a ray starting inside meets it).
 pub fn ray_meets_box(origin: Vec3, direction: Vec3, t_max: f32, (lo, hi): (Vec3, Vec3)) -> bool {

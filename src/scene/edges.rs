@@ -11,7 +11,7 @@ use std::collections::HashMap;
 use glam::{IVec3, Vec3};
 
 use super::Geometry;
-use crate::geometry::hash_cell;
+use crate::geometry::{hash_cell, sort_into_buckets};
 
 /// A triangle's side that no other triangle shares.
 #[derive(Clone, Copy, Debug)]
@@ -51,20 +51,9 @@ impl OpenEdges {
             pairs.extend(cells_near_segment(edge.a, edge.b, cell_size).into_iter().map(|c| (c, i as u32)));
         }
         let buckets = (2 * pairs.len()).max(1);
-        let mut bucket_start = vec![0u32; buckets + 1];
-        let bucket_of: Vec<usize> = pairs.iter().map(|&(c, _)| hash_cell(c, buckets)).collect();
-        for &b in &bucket_of {
-            bucket_start[b + 1] += 1;
-        }
-        for k in 1..=buckets {
-            bucket_start[k] += bucket_start[k - 1];
-        }
-        let mut next = bucket_start.clone();
-        let mut entries = vec![0u32; pairs.len()];
-        for (&b, &(_, edge)) in bucket_of.iter().zip(&pairs) {
-            entries[next[b] as usize] = edge;
-            next[b] += 1;
-        }
+        let bucket_of: Vec<u32> = pairs.iter().map(|&(c, _)| hash_cell(c, buckets) as u32).collect();
+        let (bucket_start, order) = sort_into_buckets(&bucket_of, buckets);
+        let entries = order.iter().map(|&i| pairs[i as usize].1).collect();
         OpenEdges { edges, cell_size, bucket_start, entries }
     }
 

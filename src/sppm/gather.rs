@@ -199,18 +199,19 @@ pub fn gather(eye: &[EyeResult], set: &PhotonSet) -> Vec<PixelEstimate> {
 /// disc reaches past the surface, where no photons of it land: the kernel sum alone would
 /// darken every room's corners by up to half. A photon on a surface meeting the point's at an
 /// edge (a wall's, seen from the floor) gives that surface's plane, and so the line where it cuts
-/// the disc; the sum is divided by the kernel mass left within the disc (renormalised kernel
-/// density estimation). The cut mass is kept per axis of the cutting surface's normal, the
-/// largest of each, so that a corner's two walls both count and sums over photon sets merge
-/// in any order (frames sharing photons sum two sets).
+/// the disc; the scene's open edges give the rest ([`OpenEdges`]). The sum is divided by the
+/// kernel mass left within the disc (renormalised kernel density estimation). The cut mass is
+/// kept per axis of the direction across the edge, the largest of each, so that a corner's two
+/// walls both count, an edge found both ways counts once, and sums over photon sets merge in any
+/// order (frames sharing photons sum two sets).
 #[derive(Clone, Copy, Debug, Default)]
 pub struct PhotonSums {
     /// Kernel-weighted reflected flux.
-    pub kernel: SampledSpectrum,
+    kernel: SampledSpectrum,
     /// The same with the kernel's Laplacian, and the edge terms.
-    pub laplacian: SampledSpectrum,
-    /// Kernel mass cut off by edges, per axis of the cutting surface's normal.
-    pub cut: Vec3,
+    laplacian: SampledSpectrum,
+    /// Kernel mass cut off by edges, per axis of the direction across the edge.
+    cut: Vec3,
 }
 
 /// The least kernel mass an estimate is divided by (where edges cut off more, as at the tip of
@@ -238,7 +239,7 @@ impl std::ops::Add for PhotonSums {
 /// The biweight kernel's mass beyond a line at distance `s` radii from its centre:
 /// `M(s) = 16 / (5 pi) * integral from s to 1 of (1 - t^2)^(5/2) dt` (the kernel's marginal along
 /// the line's normal), in closed form with `t = sin(phi)`.
-pub fn kernel_mass_beyond(s: f32) -> f32 {
+fn kernel_mass_beyond(s: f32) -> f32 {
     if s >= 1.0 {
         return 0.0;
     }

@@ -7,7 +7,7 @@
 
 use glam::{IVec3, Vec3};
 
-use crate::geometry::hash_cell;
+use crate::geometry::{hash_cell, sort_into_buckets};
 use rayon::prelude::*;
 
 /// Buckets of hashed grid cells over photons sorted by bucket: bucket `b` holds the sorted
@@ -29,19 +29,7 @@ impl PhotonGrid {
             .with_min_len(4096)
             .map(|&p| hash_cell((p / cell_size).floor().as_ivec3(), buckets) as u32)
             .collect();
-        let mut bucket_start = vec![0u32; buckets + 1];
-        for &b in &bucket_of {
-            bucket_start[b as usize + 1] += 1;
-        }
-        for i in 1..=buckets {
-            bucket_start[i] += bucket_start[i - 1];
-        }
-        let mut next = bucket_start.clone();
-        let mut order = vec![0u32; positions.len()];
-        for (i, &b) in bucket_of.iter().enumerate() {
-            order[next[b as usize] as usize] = i as u32;
-            next[b as usize] += 1;
-        }
+        let (bucket_start, order) = sort_into_buckets(&bucket_of, buckets);
         (PhotonGrid { cell_size, bucket_start }, order)
     }
 
