@@ -34,6 +34,10 @@ pub struct OpenEdges {
     entries: Vec<u32>,
 }
 
+/// Beyond this many open edges (a soup of loose triangles: foliage, particles) none are looked
+/// up, as the grid would take gigabytes; the gather still finds walls from their photons.
+const MOST_OPEN_EDGES: usize = 250_000;
+
 /// Surfaces whose normals are within this cosine of each other are taken as one surface.
 const SAME_SURFACE_COSINE: f32 = 0.9;
 
@@ -45,6 +49,9 @@ impl OpenEdges {
     /// The open edges of `geometry`, bucketed for lookups of radius about `cell_size`.
     pub fn of(geometry: &Geometry, cell_size: f32) -> Self {
         let edges = open_edges(geometry);
+        if edges.len() > MOST_OPEN_EDGES {
+            return OpenEdges::default();
+        }
         let cell_size = cell_size.max(f32::MIN_POSITIVE);
         let mut pairs: Vec<(IVec3, u32)> = Vec::new();
         for (i, edge) in edges.iter().enumerate() {
@@ -162,14 +169,15 @@ fn open_edge(geometry: &Geometry, t: usize, k: usize) -> Option<OpenEdge> {
     Some(OpenEdge { a, b, normal, outward })
 }
 
-/// The grid cells within a cell of any point of the segment `a`-`b` (and a few more).
+/// The grid cells within a cell of any point of the segment `a`-`b` (and a few more): the cells
+/// around each piece of it one cell long.
 fn cells_near_segment(a: Vec3, b: Vec3, cell_size: f32) -> Vec<IVec3> {
-    let steps = ((b - a).length() / (0.5 * cell_size)).ceil().clamp(1.0, 1e6) as usize;
+    let pieces = ((b - a).length() / cell_size).ceil().clamp(1.0, 1e6) as usize;
     let mut cells = Vec::new();
-    for s in 0..=steps {
-        let point = a.lerp(b, s as f32 / steps as f32);
-        let lo = ((point - Vec3::splat(1.5 * cell_size)) / cell_size).floor().as_ivec3();
-        let hi = ((point + Vec3::splat(1.5 * cell_size)) / cell_size).floor().as_ivec3();
+    for k in 0..pieces {
+        let (start, end) = (a.lerp(b, k as f32 / pieces as f32), a.lerp(b, (k + 1) as f32 / pieces as f32));
+        let lo = ((start.min(end) - Vec3::splat(cell_size)) / cell_size).floor().as_ivec3();
+        let hi = ((start.max(end) + Vec3::splat(cell_size)) / cell_size).floor().as_ivec3();
         for z in lo.z..=hi.z {
             for y in lo.y..=hi.y {
                 for x in lo.x..=hi.x {
@@ -226,6 +234,28 @@ mod tests {
         assert_eq!(beyond, Vec3::INFINITY);
         let far_above = edges.distances(Vec3::new(0.03, 0.05, -0.5), Vec3::Y, 0.1);
         assert_eq!(far_above, Vec3::INFINITY);
+    }
+
+    #[test]
+    fn a_soup_of_loose_triangles_is_not_searched() {
+        let count = MOST_OPEN_EDGES / 3 + 1;
+        let positions: Vec<Vec3> = (0..count)
+            .flat_map(|i| {
+                let o = Vec3::new(i as f32, 0.0, 0.0);
+                [o, o + Vec3::new(0.5, 0.0, 0.0), o + Vec3::new(0.0, 0.0, -0.5)]
+            })
+            .collect();
+        let soup = Geometry {
+            normals: vec![Vec3::ZERO; positions.len()],
+            uvs: vec![glam::Vec2::ZERO; positions.len()],
+            triangles: (0..count as u32)
+                .map(|i| TriangleRef { vertices: [3 * i, 3 * i + 1, 3 * i + 2], material: 0 })
+                .collect(),
+            positions,
+        };
+        let edges = OpenEdges::of(&soup, 0.1);
+        assert!(edges.is_empty(), "{} open edges kept", edges.len());
+        assert_eq!(edges.distances(Vec3::new(0.1, 0.0, -0.1), Vec3::Y, 0.1), Vec3::INFINITY);
     }
 
     #[test]
