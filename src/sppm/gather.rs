@@ -11,9 +11,10 @@
 //! kernel mass left on the surface ([`PhotonSums`]): the ends are found from photons on surfaces
 //! meeting the point's, and from the scene's open edges ([`crate::scene::OpenEdges`]).
 
-use glam::{Vec3, Vec3A};
+use glam::{Vec3, Vec4};
 use rayon::prelude::*;
-use std::f32::consts::PI;
+use std::f32::consts::{FRAC_1_PI, PI};
+use std::ops::Range;
 use std::sync::Arc;
 
 use super::grid::PhotonGrid;
@@ -21,6 +22,7 @@ use super::photons::Photon;
 use super::renderer::{PixelEstimate, VisiblePoint};
 use super::visible::EyeResult;
 use crate::error::K2;
+use crate::materials::Bsdf;
 use crate::scene::OpenEdges;
 use crate::spectrum::{SampledSpectrum, LANES};
 
@@ -46,46 +48,33 @@ impl Kernel {
         Kernel { r2, scale, laplacian_scale: -8.0 * scale / r2 }
     }
 
-    /// What `photon`, at squared distance `d2 < r^2` from `vp`, adds there: kernel-weighted
-    /// reflected flux and the same with the Laplacian; or, for a photon on a surface meeting the
-    /// point's at an edge, its edge term and the kernel mass the edge cuts off.
-    fn weigh(&self, photon: &Photon, d2: f32, vp: &VisiblePoint) -> PhotonSums {
-        let t2 = d2 / self.r2;
-        let facing = photon.ng.dot(vp.frame.ng) * vp.frame.ng.dot(vp.wo).signum();
-        if facing < EDGE_COSINE {
-            if facing <= -EDGE_COSINE {
-                return PhotonSums::default();
-            }
-            let laplacian = self.edge_term(photon, vp, t2);
-            return PhotonSums { laplacian, cut: self.cut_by(photon, vp), ..PhotonSums::default() };
-        }
-        let weighted = pair_flux(photon, vp) * vp.bsdf.eval(vp.frame.n, vp.wo, photon.wi);
-        PhotonSums {
-            kernel: weighted * self.scale * (1.0 - t2) * (1.0 - t2),
-            laplacian: weighted * self.laplacian_scale * (1.0 - 2.0 * t2),
-            cut: Vec3::ZERO,
-        }
+    /// What a photon on a surface meeting the visible point's at an edge (a wall, seen from the
+    /// floor), at squared distance `d2 < r^2` from it, adds there: its edge term and the kernel
+    /// mass the edge cuts off.
+    fn weigh_edge(&self, photon: &Arrival, at: Vec3, d2: f32, vp: &VisiblePoint) -> PhotonSums {
+        let laplacian = self.edge_term(photon, vp, d2 / self.r2);
+        PhotonSums { laplacian, cut: self.cut_by(photon.ng, at, vp), ..PhotonSums::default() }
     }
 
-    /// The kernel mass that the plane of `photon`'s surface cuts off the disc around `vp` (in
-    /// `vp`'s plane), filed under the axis its normal is closest to.
-    fn cut_by(&self, photon: &Photon, vp: &VisiblePoint) -> Vec3 {
+    /// The kernel mass that the plane through `at` of normal `ng` (a photon's surface) cuts off
+    /// the disc around `vp` (in `vp`'s plane), filed under the axis its normal is closest to.
+    fn cut_by(&self, ng: Vec3, at: Vec3, vp: &VisiblePoint) -> Vec3 {
         let n = vp.frame.ng;
-        let in_plane = photon.ng - photon.ng.dot(n) * n;
+        let in_plane = ng - ng.dot(n) * n;
         let sine = in_plane.length();
         if sine < 0.5 {
             return Vec3::ZERO;
         }
-        let distance = (vp.p - photon.p).dot(photon.ng).abs() / sine;
+        let distance = (vp.p - at).dot(ng).abs() / sine;
         let mass = kernel_mass_beyond(distance / self.r2.sqrt());
-        let axis = photon.ng.abs().max_position();
+        let axis = ng.abs().max_position();
         Vec3::AXES[axis] * mass
     }
 
     /// A photon on a surface meeting the visible point's at an edge stands for the photons the
     /// disc misses beyond that edge: what it would add there (its direction mirrored to the
     /// visible point's side), as a negative bias in Laplacian units (`bias = k2 r^2 / 2 * term`).
-    fn edge_term(&self, photon: &Photon, vp: &VisiblePoint, t2: f32) -> SampledSpectrum {
+    fn edge_term(&self, photon: &Arrival, vp: &VisiblePoint, t2: f32) -> SampledSpectrum {
         let n = vp.frame.n;
         let wi = if photon.wi.dot(n) * vp.wo.dot(n) < 0.0 {
             photon.wi - 2.0 * photon.wi.dot(n) * n
@@ -100,11 +89,27 @@ impl Kernel {
 
 /// `photon`'s flux as the path joining it to `vp` carries it: both halves scale their hero lane
 /// by the lanes' count when they drop the others, and the joined path must do so once.
-fn pair_flux(photon: &Photon, vp: &VisiblePoint) -> SampledSpectrum {
+fn pair_flux(photon: &Arrival, vp: &VisiblePoint) -> SampledSpectrum {
     if photon.hero_only && vp.hero_only {
         photon.flux / LANES as f32
     } else {
         photon.flux
+    }
+}
+
+/// What the gather reads of a photon besides its position: 48 bytes, where the whole photon
+/// takes 64.
+#[derive(Clone, Copy)]
+struct Arrival {
+    flux: SampledSpectrum,
+    ng: Vec3,
+    wi: Vec3,
+    hero_only: bool,
+}
+
+impl Arrival {
+    fn of(photon: &Photon) -> Self {
+        Arrival { flux: photon.flux, ng: photon.ng, wi: photon.wi, hero_only: photon.hero_only }
     }
 }
 
@@ -123,8 +128,8 @@ fn within((lo, hi): (Vec3, Vec3), p: Vec3) -> bool {
 /// most photons of the cells around a point are out of reach, and the distance test then reads
 /// 16 bytes a photon instead of a whole photon.
 pub struct PhotonSet {
-    sorted: Vec<Photon>,
-    positions: Vec<Vec3A>,
+    sorted: Vec<Arrival>,
+    positions: Positions,
     grid: PhotonGrid,
     reach: Option<(Vec3, Vec3)>,
     kernel: Kernel,
@@ -137,9 +142,10 @@ impl PhotonSet {
     pub fn new(photons: &[Photon], radius: f32, open_edges: &Arc<OpenEdges>) -> Self {
         let positions: Vec<Vec3> = photons.par_iter().with_min_len(4096).map(|p| p.p).collect();
         let (grid, order) = PhotonGrid::build(&positions, radius);
-        let sorted: Vec<Photon> = order.par_iter().with_min_len(4096).map(|&i| photons[i as usize]).collect();
+        let sorted =
+            order.par_iter().with_min_len(4096).map(|&i| Arrival::of(&photons[i as usize])).collect();
         let reach = reach(positions.iter().copied(), radius);
-        let positions = sorted.par_iter().with_min_len(4096).map(|p| Vec3A::from(p.p)).collect();
+        let positions = Positions::new(order.iter().map(|&i| positions[i as usize]));
         PhotonSet {
             sorted,
             positions,
@@ -152,25 +158,151 @@ impl PhotonSet {
 
     /// What the photons near `vp` add up to there, before the path throughput.
     pub fn sum_at(&self, vp: &VisiblePoint) -> PhotonSums {
-        let mut sums = PhotonSums::default();
-        if self.reach.is_some_and(|r| within(r, vp.p)) {
-            let p = Vec3A::from(vp.p);
-            self.grid.for_each_near(vp.p, |range| {
-                for (i, position) in range.clone().zip(&self.positions[range]) {
-                    let d2 = position.distance_squared(p);
-                    if d2 >= self.kernel.r2 {
-                        continue;
-                    }
-                    sums = sums + self.kernel.weigh(&self.sorted[i], d2, vp);
-                }
-            });
+        if !self.reach.is_some_and(|r| within(r, vp.p)) {
+            return PhotonSums::default();
         }
+        let mut sums = Weigher::new(&self.kernel, vp);
+        self.grid.for_each_near(vp.p, |range| {
+            self.positions.for_each_within(range, vp.p, self.kernel.r2, |i, d2| {
+                sums.add(&self.sorted[i], d2, || self.positions.at(i))
+            });
+        });
+        let mut sums = sums.finish();
         if sums.kernel != SampledSpectrum::ZERO {
             let radius = self.kernel.r2.sqrt();
             let edges = self.open_edges.distances(vp.p, vp.frame.ng, radius);
             sums.cut = sums.cut.max(edges.map(|d| kernel_mass_beyond(d / radius)));
         }
         sums
+    }
+}
+
+/// Photon positions, one array per coordinate, so that four distances are tested at once.
+/// Each array has three more entries than photons, far away, for the last group of four.
+struct Positions {
+    x: Vec<f32>,
+    y: Vec<f32>,
+    z: Vec<f32>,
+}
+
+impl Positions {
+    fn new(points: impl ExactSizeIterator<Item = Vec3>) -> Self {
+        let padded = points.len() + 3;
+        let mut positions = Positions {
+            x: Vec::with_capacity(padded),
+            y: Vec::with_capacity(padded),
+            z: Vec::with_capacity(padded),
+        };
+        for p in points.chain([Vec3::INFINITY; 3]) {
+            positions.x.push(p.x);
+            positions.y.push(p.y);
+            positions.z.push(p.z);
+        }
+        positions
+    }
+
+    fn at(&self, i: usize) -> Vec3 {
+        Vec3::new(self.x[i], self.y[i], self.z[i])
+    }
+
+    /// Calls `visit(i, d2)` for each photon `i` in `range` at squared distance `d2 < r2` from
+    /// `p`. About one candidate in six is within reach, unpredictably: four distances are tested
+    /// at a time, without branches, and only the hits are visited.
+    #[inline]
+    fn for_each_within(&self, range: Range<usize>, p: Vec3, r2: f32, mut visit: impl FnMut(usize, f32)) {
+        let lane = Vec4::new(0.0, 1.0, 2.0, 3.0);
+        for i in range.clone().step_by(4) {
+            let dx = Vec4::from_slice(&self.x[i..i + 4]) - p.x;
+            let dy = Vec4::from_slice(&self.y[i..i + 4]) - p.y;
+            let dz = Vec4::from_slice(&self.z[i..i + 4]) - p.z;
+            let d2 = dx * dx + dy * dy + dz * dz;
+            let in_range = lane.cmplt(Vec4::splat((range.end - i) as f32));
+            let mut hits = (d2.cmplt(Vec4::splat(r2)) & in_range).bitmask();
+            let d2 = d2.to_array();
+            while hits != 0 {
+                let k = hits.trailing_zeros() as usize;
+                visit(i + k, d2[k]);
+                hits &= hits - 1;
+            }
+        }
+    }
+}
+
+/// Sums photons' contributions at one visible point. The kernel and its Laplacian are sums of
+/// each photon's flux times a number; for a diffuse surface the BSDF is the same for every photon
+/// from the side it is seen from, and multiplies the sums once at the end.
+struct Weigher<'a> {
+    kernel: &'a Kernel,
+    vp: &'a VisiblePoint,
+    /// The geometric normal on the side the point is seen from.
+    front: Vec3,
+    /// For a diffuse surface, the shading normal on the side it is seen from (zero when seen
+    /// exactly edge-on) and its BSDF value.
+    diffuse: Option<(Vec3, SampledSpectrum)>,
+    /// The factor on the flux of a photon that carries its hero wavelength alone.
+    hero_only_scale: f32,
+    flux_kernel: SampledSpectrum,
+    flux_laplacian: SampledSpectrum,
+    edges: PhotonSums,
+}
+
+impl<'a> Weigher<'a> {
+    fn new(kernel: &'a Kernel, vp: &'a VisiblePoint) -> Self {
+        let side = |n: Vec3| {
+            let cos = n.dot(vp.wo);
+            n * if cos > 0.0 {
+                1.0
+            } else if cos < 0.0 {
+                -1.0
+            } else {
+                0.0
+            }
+        };
+        let diffuse = match vp.bsdf {
+            Bsdf::Diffuse { albedo } => Some((side(vp.frame.n), albedo * FRAC_1_PI)),
+            _ => None,
+        };
+        Weigher {
+            kernel,
+            vp,
+            front: vp.frame.ng * vp.frame.ng.dot(vp.wo).signum(),
+            diffuse,
+            hero_only_scale: if vp.hero_only { 1.0 / LANES as f32 } else { 1.0 },
+            flux_kernel: SampledSpectrum::ZERO,
+            flux_laplacian: SampledSpectrum::ZERO,
+            edges: PhotonSums::default(),
+        }
+    }
+
+    /// Adds `photon`, at squared distance `d2 < r^2`. Photons on surfaces meeting the point's at
+    /// an edge add an edge term and cut; those facing away lie behind (the back of a thin wall).
+    #[inline]
+    fn add(&mut self, photon: &Arrival, d2: f32, at: impl FnOnce() -> Vec3) {
+        let facing = photon.ng.dot(self.front);
+        if facing < EDGE_COSINE {
+            if facing > -EDGE_COSINE {
+                self.edges = self.edges + self.kernel.weigh_edge(photon, at(), d2, self.vp);
+            }
+            return;
+        }
+        let flux = if photon.hero_only { photon.flux * self.hero_only_scale } else { photon.flux };
+        let weighted = match self.diffuse {
+            Some((n, _)) if photon.wi.dot(n) > 0.0 => flux,
+            Some(_) => return,
+            None => flux * self.vp.bsdf.eval(self.vp.frame.n, self.vp.wo, photon.wi),
+        };
+        let t2 = d2 / self.kernel.r2;
+        self.flux_kernel += weighted * ((1.0 - t2) * (1.0 - t2));
+        self.flux_laplacian += weighted * (1.0 - 2.0 * t2);
+    }
+
+    fn finish(self) -> PhotonSums {
+        let bsdf = self.diffuse.map_or(SampledSpectrum::ONE, |(_, f)| f);
+        PhotonSums {
+            kernel: self.flux_kernel * bsdf * self.kernel.scale,
+            laplacian: self.flux_laplacian * bsdf * self.kernel.laplacian_scale,
+            cut: Vec3::ZERO,
+        } + self.edges
     }
 }
 
