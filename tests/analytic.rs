@@ -73,6 +73,11 @@ fn rgb_albedo_round_trips() {
 /// where no photons land; the gather renormalises its kernel by the open edge, so the column
 /// beside the edge must read within 6% of the floor 4 to 12 pixels in (measured 0.01% apart;
 /// without the renormalisation, 38% low), and the columns past the edge must be black.
+///
+/// The floor there must also read what the pane lets through and reflects back: albedo 0.8 times
+/// the thin pane's transmittance `(1 - R) / (1 + R)` (R = 0.04 at normal incidence for index 1.5),
+/// plus the floor's own light that the pane reflects back down (`2R / (1 + R)` of it, over the
+/// view factor of the floor's mirror image one unit up), within 1.5%.
 #[test]
 fn a_floors_open_edge_is_not_darkened() {
     let dir = tempfile::tempdir().unwrap();
@@ -113,4 +118,33 @@ fn a_floors_open_edge_is_not_darkened() {
     );
     let past_edge = if lit[0] == 0 { column(16) } else { column(15) };
     assert!(past_edge < 0.01 * interior, "past the edge: {past_edge}");
+    let reflectance = 0.04;
+    let (transmitted, reflected) =
+        ((1.0 - reflectance) / (1.0 + reflectance), 2.0 * reflectance / (1.0 + reflectance));
+    // The interior columns' middle is 8 pixels (0.125) in from the edge at x = 1, at z = 0.
+    let image_seen = view_factor_to_square_above(0.875, 0.0, 1.0, 1.0);
+    let direct = 0.8 * transmitted;
+    let expected = direct * (1.0 + 0.8 * reflected * image_seen);
+    assert!(
+        (interior / expected - 1.0).abs() < 0.015,
+        "the floor reads {interior}; through the pane and back from it {expected}"
+    );
+}
+
+/// The view factor from a point at `(x, z)` of a plane, facing up, to the square `|x|, |z| <=
+/// half` at `height` above it: the sum over the four rectangles with a corner straight above the
+/// point, each by the formula for a parallel rectangle with a corner straight above the point.
+fn view_factor_to_square_above(x: f64, z: f64, half: f64, height: f64) -> f64 {
+    let corner = |a: f64, b: f64| {
+        let (a, b) = (a / height, b / height);
+        let (ra, rb) = ((1.0 + a * a).sqrt(), (1.0 + b * b).sqrt());
+        a.signum()
+            * b.signum()
+            * (a.abs() / ra * (b.abs() / ra).atan() + b.abs() / rb * (a.abs() / rb).atan())
+            / (2.0 * std::f64::consts::PI)
+    };
+    [(half - x, half - z), (half + x, half - z), (half - x, half + z), (half + x, half + z)]
+        .into_iter()
+        .map(|(a, b)| corner(a, b))
+        .sum()
 }
