@@ -41,12 +41,14 @@ impl Renderer<'_> {
     fn trace_photons(&self, pass: &PassSamples) -> (Vec<Photon>, PassStats) {
         let chunks: Vec<(Vec<Photon>, PassStats)> = photon_chunks(self.settings.photons_per_pass)
             .map(|paths| {
-                let mut photons = Vec::new();
+                let mut photons = Vec::with_capacity(paths.end as usize - paths.start as usize);
                 let stats = paths.map(|k| trace_photon(self, pass, k, &mut photons)).sum();
                 (photons, stats)
             })
             .collect();
         let stats = chunks.iter().map(|(_, s)| *s).sum();
-        (chunks.into_iter().flat_map(|(p, _)| p).collect(), stats)
+        let mut photons = Vec::with_capacity(chunks.iter().map(|(p, _)| p.len()).sum());
+        chunks.into_iter().for_each(|(p, _)| photons.extend(p));
+        (photons, stats)
     }
 }
