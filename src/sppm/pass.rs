@@ -9,7 +9,6 @@ use super::gather::{gather, PhotonSet};
 use super::photons::{photon_chunks, trace_photon, Photon};
 use super::renderer::{collect_counting, PassSamples, PassStats, PixelEstimate, Renderer};
 use super::visible::{trace_eye_path, EyeResult};
-use crate::spectrum::SampledSpectrum;
 
 impl Renderer<'_> {
     /// Renders pass `index`: one estimate per pixel, in row-major order.
@@ -34,8 +33,7 @@ impl Renderer<'_> {
 
     fn trace_visible_points(&self, pass: &PassSamples) -> (Vec<EyeResult>, PassStats) {
         let pixels = (self.settings.width * self.settings.height) as usize;
-        let empty = EyeResult { radiance: SampledSpectrum::ZERO, point: None };
-        collect_counting(pixels, empty, |pixel| trace_eye_path(self, pass, pixel))
+        collect_counting(pixels, |pixel| trace_eye_path(self, pass, pixel))
     }
 
     fn trace_photons(&self, pass: &PassSamples) -> (Vec<Photon>, PassStats) {

@@ -2,6 +2,7 @@
 //! scene, its BVHs and how lights are chosen), and what a pass produces and counts.
 
 use glam::Vec3;
+use std::sync::{Mutex, PoisonError};
 
 use crate::accel::Accel;
 use crate::lights::Light;
@@ -131,29 +132,42 @@ impl std::ops::Add for PassStats {
 const TASK_ITEMS: usize = 64;
 
 /// `f(i)` for every `i` in `0..count`, computed in parallel tasks that each sum the counts `f`
-/// returns: only the results are stored per item, and sums of counts are the same on any number
-/// of threads.
-pub fn collect_counting<T: Clone + Send>(
+/// returns: only the results are stored per item. The results are written in place, in
+/// parallel, into a list allocated once (not filled first); counts are whole numbers, so their
+/// sum is the same whichever task adds first.
+pub fn collect_counting<T: Send>(
     count: usize,
-    empty: T,
     f: impl Fn(usize) -> (T, PassStats) + Sync,
 ) -> (Vec<T>, PassStats) {
     use rayon::prelude::*;
-    let mut results = vec![empty; count];
-    let stats = results
-        .par_chunks_mut(TASK_ITEMS)
-        .enumerate()
-        .map(|(task, out)| {
-            let mut stats = PassStats::default();
-            for (i, result) in out.iter_mut().enumerate() {
-                let (value, item_stats) = f(task * TASK_ITEMS + i);
-                *result = value;
-                stats = stats + item_stats;
-            }
-            stats
-        })
-        .sum();
-    (results, stats)
+    let total = Mutex::new(PassStats::default());
+    let results = (0..count)
+        .into_par_iter()
+        .with_min_len(TASK_ITEMS)
+        .map_init(
+            || Tally { total: &total, sum: PassStats::default() },
+            |tally, i| {
+                let (value, stats) = f(i);
+                tally.sum = tally.sum + stats;
+                value
+            },
+        )
+        .collect();
+    (results, total.into_inner().unwrap_or_else(PoisonError::into_inner))
+}
+
+/// One task's counts, added to the pass's total when the task ends.
+struct Tally<'a> {
+    total: &'a Mutex<PassStats>,
+    sum: PassStats,
+}
+
+impl Drop for Tally<'_> {
+    fn drop(&mut self) {
+        if let Ok(mut total) = self.total.lock() {
+            *total = *total + self.sum;
+        }
+    }
 }
 
 /// Everything a pass reads: the scene, its BVH, how lights are chosen, and the settings.

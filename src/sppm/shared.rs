@@ -141,7 +141,7 @@ pub fn run_shared_pass(
         let own = own_photons(&shared, &always_valid, photons);
         let own_set = PhotonSet::new(&own, pass.radius, &frame.scene.open_edges);
         let pixels = (frame.settings.width * frame.settings.height) as usize;
-        let (estimates, eye_stats) = collect_counting(pixels, PixelEstimate::default(), |pixel| {
+        let (estimates, eye_stats) = collect_counting(pixels, |pixel| {
             let (eye, common_sum, eye_stats) = match &eyes {
                 Some((records, _)) => match frame_eye(frame, pass, &records[pixel]) {
                     (eye, false, s) => (eye, common_sums[pixel], s),
