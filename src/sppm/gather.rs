@@ -124,9 +124,9 @@ fn within((lo, hi): (Vec3, Vec3), p: Vec3) -> bool {
 }
 
 /// Photons bucketed for gathering at one radius (a copy, sorted by bucket, so that a gather
-/// reads each bucket's photons from consecutive memory). Their positions are kept apart as well:
-/// most photons of the cells around a point are out of reach, and the distance test then reads
-/// 16 bytes a photon instead of a whole photon.
+/// reads each bucket's photons from consecutive memory). Their positions are kept apart, one
+/// array per coordinate: most photons of the cells around a point are out of reach, and the
+/// distance test reads 12 bytes a photon, four photons at a time, before any photon's other 48.
 pub struct PhotonSet {
     sorted: Vec<Arrival>,
     positions: Positions,
