@@ -236,9 +236,9 @@ struct Weigher<'a> {
     vp: &'a VisiblePoint,
     /// The geometric normal on the side the point is seen from.
     front: Vec3,
-    /// For a diffuse surface, the shading normal on the side it is seen from (zero when seen
-    /// exactly edge-on) and its BSDF value.
-    diffuse: Option<(Vec3, SampledSpectrum)>,
+    /// For a diffuse surface, the cosine of the direction it is seen from (photons count from
+    /// the same side of the shading normal) and its BSDF value.
+    diffuse: Option<(f32, SampledSpectrum)>,
     /// The factor on the flux of a photon that carries its hero wavelength alone.
     hero_only_scale: f32,
     flux_kernel: SampledSpectrum,
@@ -248,18 +248,8 @@ struct Weigher<'a> {
 
 impl<'a> Weigher<'a> {
     fn new(kernel: &'a Kernel, vp: &'a VisiblePoint) -> Self {
-        let side = |n: Vec3| {
-            let cos = n.dot(vp.wo);
-            n * if cos > 0.0 {
-                1.0
-            } else if cos < 0.0 {
-                -1.0
-            } else {
-                0.0
-            }
-        };
         let diffuse = match vp.bsdf {
-            Bsdf::Diffuse { albedo } => Some((side(vp.frame.n), albedo * FRAC_1_PI)),
+            Bsdf::Diffuse { albedo } => Some((vp.frame.n.dot(vp.wo), albedo * FRAC_1_PI)),
             _ => None,
         };
         Weigher {
@@ -287,7 +277,7 @@ impl<'a> Weigher<'a> {
         }
         let flux = if photon.hero_only { photon.flux * self.hero_only_scale } else { photon.flux };
         let weighted = match self.diffuse {
-            Some((n, _)) if photon.wi.dot(n) > 0.0 => flux,
+            Some((cos_wo, _)) if photon.wi.dot(self.vp.frame.n) * cos_wo > 0.0 => flux,
             Some(_) => return,
             None => flux * self.vp.bsdf.eval(self.vp.frame.n, self.vp.wo, photon.wi),
         };
