@@ -13,7 +13,7 @@ use glam::{Vec2, Vec3, Vec4};
 
 use super::BoundingSphere;
 use crate::sampling::{square_to_sphere, Distribution2D};
-use crate::spectrum::{rgb::IlluminantTable, RgbSpectrum, SampledSpectrum, Wavelengths};
+use crate::spectrum::{rgb::IlluminantTable, RgbSpectrum, Rows, SampledSpectrum, SpectrumImage, Wavelengths};
 
 /// The world's light.
 #[derive(Clone, Debug)]
@@ -28,9 +28,7 @@ pub struct World {
 
 /// An equirectangular image of spectra with its sampling distribution.
 pub struct EnvironmentMap {
-    width: usize,
-    height: usize,
-    texels: Vec<RgbSpectrum>,
+    image: SpectrumImage,
     distribution: Distribution2D,
     rotation: f32,
     /// Luminance integrated over the sphere of directions.
@@ -39,7 +37,8 @@ pub struct EnvironmentMap {
 
 impl std::fmt::Debug for EnvironmentMap {
     fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
-        write!(f, "EnvironmentMap({}x{})", self.width, self.height)
+        let (width, height) = self.image.size();
+        write!(f, "EnvironmentMap({width}x{height})")
     }
 }
 
@@ -130,25 +129,14 @@ impl EnvironmentMap {
         let texel_solid_angle = 2.0 * std::f64::consts::PI * std::f64::consts::PI / (width * height) as f64;
         let luminance_over_sphere = weights.iter().sum::<f64>() * texel_solid_angle;
         let distribution = Distribution2D::new(&weights, width);
-        EnvironmentMap { width, height, texels, distribution, rotation, luminance_over_sphere }
+        let image = SpectrumImage::new(width, height, texels);
+        EnvironmentMap { image, distribution, rotation, luminance_over_sphere }
     }
 
     /// The image's value at four wavelengths (nm) toward `dir`, bilinearly interpolated (wrapping
     /// around).
     fn eval(&self, dir: Vec3, lambda_nm: Vec4) -> Vec4 {
-        let point = direction_to_image(dir, self.rotation);
-        let x = point.x * self.width as f32 - 0.5;
-        let y = (point.y * self.height as f32 - 0.5).clamp(0.0, (self.height - 1) as f32);
-        let (x0, y0) = (x.floor(), y.floor());
-        let (tx, ty) = (x - x0, y - y0);
-        let texel = |dx: i64, dy: usize| {
-            let i = (x0 as i64 + dx).rem_euclid(self.width as i64) as usize;
-            let j = (y0 as usize + dy).min(self.height - 1);
-            self.texels[j * self.width + i].eval_lanes(lambda_nm)
-        };
-        let top = texel(0, 0) * (1.0 - tx) + texel(1, 0) * tx;
-        let bottom = texel(0, 1) * (1.0 - tx) + texel(1, 1) * tx;
-        top * (1.0 - ty) + bottom * ty
+        self.image.eval(direction_to_image(dir, self.rotation), Rows::Clamp, lambda_nm)
     }
 
     /// A direction by luminance, with its density per solid angle.

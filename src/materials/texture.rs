@@ -8,14 +8,12 @@ use std::collections::HashMap;
 
 use glam::{Vec2, Vec3, Vec4};
 
-use crate::spectrum::RgbSpectrum;
+use crate::spectrum::{RgbSpectrum, Rows, SpectrumImage};
 
 /// A texture of reflectance spectra.
 #[derive(Clone, Debug)]
 pub struct Texture {
-    width: usize,
-    height: usize,
-    texels: Vec<RgbSpectrum>,
+    image: SpectrumImage,
 }
 
 /// The sRGB transfer function, decoded to linear.
@@ -42,22 +40,11 @@ impl Texture {
                 })
             })
             .collect();
-        Texture { width, height, texels }
+        Texture { image: SpectrumImage::new(width, height, texels) }
     }
 
     /// The reflectance at texture coordinate `uv` and four wavelengths, nm.
     pub fn eval(&self, uv: Vec2, lambda_nm: Vec4) -> Vec4 {
-        let x = uv.x * self.width as f32 - 0.5;
-        let y = uv.y * self.height as f32 - 0.5;
-        let (x0, y0) = (x.floor(), y.floor());
-        let (tx, ty) = (x - x0, y - y0);
-        let texel = |dx: i64, dy: i64| {
-            let i = (x0 as i64 + dx).rem_euclid(self.width as i64) as usize;
-            let j = (y0 as i64 + dy).rem_euclid(self.height as i64) as usize;
-            self.texels[j * self.width + i].eval_lanes(lambda_nm)
-        };
-        let top = texel(0, 0) * (1.0 - tx) + texel(1, 0) * tx;
-        let bottom = texel(0, 1) * (1.0 - tx) + texel(1, 1) * tx;
-        top * (1.0 - ty) + bottom * ty
+        self.image.eval(uv, Rows::Wrap, lambda_nm)
     }
 }

@@ -12,7 +12,7 @@ pub mod tables;
 pub mod wavelength;
 
 pub use dispersion::Dispersion;
-pub use rgb::RgbSpectrum;
+pub use rgb::{RgbSpectrum, Rows, SpectrumImage};
 pub use tables::{
     cmf, d65, d65_xyz, linear_rec709_to_xyz, xyz_to_linear_rec709, LAMBDA_MAX_NM, LAMBDA_MIN_NM,
 };

@@ -7,7 +7,7 @@
 //! D65, has the requested linear Rec.709 colour. Light colours (any non-negative RGB) are a
 //! reflectance of `rgb / (2 max)` times `2 max`, times the D65 illuminant.
 
-use glam::{DVec3, Vec3, Vec4};
+use glam::{DVec3, Vec2, Vec3, Vec4};
 
 use super::tables::{cmf, d65, table_wavelengths, xyz_to_linear_rec709};
 
@@ -253,5 +253,59 @@ mod tests {
         let rgb = Vec3::new(4.0, 2.0, 1.0);
         let back = colour_under_d65(&RgbSpectrum::illuminant(rgb));
         assert!((back - rgb).abs().max_element() < 1e-2, "{back}");
+    }
+}
+
+/// An image of spectra (a texture, an environment map), looked up with bilinear interpolation of
+/// the spectra's values. Columns wrap around.
+#[derive(Clone, Debug)]
+pub struct SpectrumImage {
+    width: usize,
+    height: usize,
+    texels: Vec<RgbSpectrum>,
+}
+
+/// What lies past an image's first and last rows.
+#[derive(Clone, Copy, Debug)]
+pub enum Rows {
+    /// The image repeats (glTF's REPEAT).
+    Wrap,
+    /// The edge rows continue (the poles of an environment map).
+    Clamp,
+}
+
+impl SpectrumImage {
+    /// An image of `width` x `height` texels, row by row.
+    pub fn new(width: usize, height: usize, texels: Vec<RgbSpectrum>) -> Self {
+        SpectrumImage { width, height, texels }
+    }
+
+    /// Width and height in texels.
+    pub fn size(&self) -> (usize, usize) {
+        (self.width, self.height)
+    }
+
+    /// The value at image coordinates `point` (0 to 1 across and down; texel centres at half
+    /// texels) and four wavelengths, nm.
+    pub fn eval(&self, point: Vec2, rows: Rows, lambda_nm: Vec4) -> Vec4 {
+        let last_row = (self.height - 1) as f32;
+        let x = point.x * self.width as f32 - 0.5;
+        let y = match rows {
+            Rows::Wrap => point.y * self.height as f32 - 0.5,
+            Rows::Clamp => (point.y * self.height as f32 - 0.5).clamp(0.0, last_row),
+        };
+        let (x0, y0) = (x.floor(), y.floor());
+        let (tx, ty) = (x - x0, y - y0);
+        let texel = |dx: i64, dy: i64| {
+            let i = (x0 as i64 + dx).rem_euclid(self.width as i64) as usize;
+            let j = match rows {
+                Rows::Wrap => (y0 as i64 + dy).rem_euclid(self.height as i64),
+                Rows::Clamp => (y0 as i64 + dy).min(self.height as i64 - 1),
+            } as usize;
+            self.texels[j * self.width + i].eval_lanes(lambda_nm)
+        };
+        let top = texel(0, 0) * (1.0 - tx) + texel(1, 0) * tx;
+        let bottom = texel(0, 1) * (1.0 - tx) + texel(1, 1) * tx;
+        top * (1.0 - ty) + bottom * ty
     }
 }
