@@ -26,6 +26,21 @@ pub struct Hit {
     pub t: f32,
     /// Barycentric coordinates of the hit (weights of corners 1 and 2).
     pub barycentric: Vec2,
+    /// The point hit, interpolated from the corners with the barycentric coordinates.
+    pub p: Vec3,
+    /// The triangle's unit geometric normal (zero for a degenerate triangle).
+    pub ng: Vec3,
+    /// The largest coordinate of the triangle's corners (for offsetting rays that leave it).
+    pub scale: f32,
+}
+
+/// The nearest triangle along a ray of one BVH, as traversal finds it.
+#[derive(Clone, Copy, Debug)]
+struct Nearest {
+    /// Index of the triangle in the BVH's list.
+    triangle: u32,
+    /// Distance along the ray, in the BVH's working coordinates.
+    t: f32,
 }
 
 /// One BVH over a list of triangles.
@@ -111,8 +126,8 @@ impl Accel {
     /// Asks `rays` again (bare traversal, nothing else); gives how many hit.
     pub fn replay(&self, rays: &[RecordedRay]) -> usize {
         let answer = |r: &RecordedRay| match r.query {
-            Query::Closest => self.closest(r.origin, r.direction, r.t_max, false).is_some(),
-            Query::ClosestOpaque => self.closest(r.origin, r.direction, r.t_max, true).is_some(),
+            Query::Closest => self.nearest(r.origin, r.direction, r.t_max, false).is_some(),
+            Query::ClosestOpaque => self.nearest(r.origin, r.direction, r.t_max, true).is_some(),
             Query::Occluded => self.blocked(r.origin, r.direction, r.t_max),
         };
         rays.iter().filter(|r| answer(r)).count()
@@ -138,11 +153,25 @@ impl Accel {
     }
 
     fn closest(&self, origin: Vec3, direction: Vec3, t_max: f32, opaque_only: bool) -> Option<Hit> {
-        let fixed = self.fixed.intersect(origin, direction, t_max, opaque_only);
-        let moving = self.moving.intersect(origin, direction, fixed.map_or(t_max, |h| h.t), opaque_only);
-        match moving {
-            Some(hit) => Some(Hit { triangle: hit.triangle + self.fixed_count, ..hit }),
-            None => fixed,
+        let (bvh, nearest) = self.nearest(origin, direction, t_max, opaque_only)?;
+        let hit = bvh.hit(nearest, origin, direction);
+        let first = if std::ptr::eq(bvh, &self.moving) { self.fixed_count } else { 0 };
+        Some(Hit { triangle: hit.triangle + first, ..hit })
+    }
+
+    /// The nearest triangle along the ray, and the BVH it is in (traversal alone).
+    fn nearest(
+        &self,
+        origin: Vec3,
+        direction: Vec3,
+        t_max: f32,
+        opaque_only: bool,
+    ) -> Option<(&Bvh, Nearest)> {
+        let fixed = self.fixed.nearest(origin, direction, t_max, opaque_only);
+        let t_fixed = fixed.map_or(t_max, |n| n.t / self.fixed.scale);
+        match self.moving.nearest(origin, direction, t_fixed, opaque_only) {
+            Some(moving) => Some((&self.moving, moving)),
+            None => fixed.map(|f| (&*self.fixed, f)),
         }
     }
 
@@ -205,21 +234,38 @@ impl Bvh {
         Ray::new((origin * self.scale).into(), (direction + Vec3::ZERO).into(), 0.0, t_max * self.scale)
     }
 
-    /// The closest hit along the ray from `origin` in the unit `direction` before `t_max`, among
-    /// the triangles that cast shadows if `opaque_only`.
-    pub fn intersect(&self, origin: Vec3, direction: Vec3, t_max: f32, opaque_only: bool) -> Option<Hit> {
+    /// The nearest triangle along the ray from `origin` in the unit `direction` before `t_max`,
+    /// among the triangles that cast shadows if `opaque_only`.
+    fn nearest(&self, origin: Vec3, direction: Vec3, t_max: f32, opaque_only: bool) -> Option<Nearest> {
         let bvh = self.bvh.as_ref()?;
         let ray = self.ray(origin, direction, t_max);
         let mut hit = RayHit::none();
         let found =
             bvh.ray_traverse(ray, &mut hit, |ray, slot| self.hit_distance(bvh, ray, slot, opaque_only));
-        if !found {
-            return None;
+        found.then(|| Nearest { triangle: bvh.primitive_indices[hit.primitive_id as usize], t: hit.t })
+    }
+
+    /// The hit at `nearest` along the ray from `origin` in the unit `direction`, in world
+    /// coordinates. The surface there is computed from the BVH's own copy of the corners, which
+    /// traversal has just read, rather than from the scene's vertex arrays. Working coordinates
+    /// are world coordinates times a power of two, so every figure is the same bits as from the
+    /// world corners.
+    fn hit(&self, nearest: Nearest, origin: Vec3, direction: Vec3) -> Hit {
+        let corners = &self.triangles[nearest.triangle as usize];
+        let [v0, v1, v2] = [corners.v0, corners.v1, corners.v2].map(Vec3::from);
+        let normal = (v1 - v0).cross(v2 - v0);
+        let at = origin * self.scale + direction * nearest.t;
+        let barycentric = barycentric(v0, v1 - v0, v2 - v0, normal, at);
+        let w = [1.0 - barycentric.x - barycentric.y, barycentric.x, barycentric.y];
+        let largest = v0.abs().max_element().max(v1.abs().max_element()).max(v2.abs().max_element());
+        Hit {
+            triangle: nearest.triangle,
+            t: nearest.t / self.scale,
+            barycentric,
+            p: (v0 * w[0] + v1 * w[1] + v2 * w[2]) / self.scale,
+            ng: normal.normalize_or_zero(),
+            scale: largest / self.scale,
         }
-        let triangle = bvh.primitive_indices[hit.primitive_id as usize];
-        let barycentric =
-            barycentric(&self.triangles[triangle as usize], Vec3::from(ray.origin) + direction * hit.t);
-        Some(Hit { triangle, t: hit.t / self.scale, barycentric })
     }
 
     /// Whether anything that casts shadows lies on the ray from `origin` in the unit `direction`
@@ -243,10 +289,9 @@ impl Bvh {
     }
 }
 
-/// The barycentric coordinates (weights of v1 and v2) of `p`, a point on triangle `tri`.
-fn barycentric(tri: &Triangle, p: Vec3) -> Vec2 {
-    let (v0, e1, e2) = (Vec3::from(tri.v0), Vec3::from(tri.v1 - tri.v0), Vec3::from(tri.v2 - tri.v0));
-    let n = e1.cross(e2);
+/// The barycentric coordinates (weights of v1 and v2) of `p`, a point on the triangle with
+/// corner `v0`, edges `e1` and `e2` from it, and normal `n = e1 x e2`.
+fn barycentric(v0: Vec3, e1: Vec3, e2: Vec3, n: Vec3, p: Vec3) -> Vec2 {
     let inv = 1.0 / n.length_squared();
     let d = p - v0;
     let b1 = d.cross(e2).dot(n) * inv;

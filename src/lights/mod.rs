@@ -67,16 +67,58 @@ pub enum Light {
         sphere: BoundingSphere,
     },
     /// One emitting triangle of an emissive mesh or an area light.
-    Triangle {
-        /// Its corners.
-        corners: [Vec3; 3],
-        /// Emitted radiance, W / (m^2 sr).
-        radiance: RgbSpectrum,
-        /// Whether both faces emit (meshes) or only the front (area lights).
-        both_sides: bool,
-    },
+    Triangle(EmittingTriangle),
     /// Light from infinitely far away in every direction.
     World(World),
+}
+
+/// An emitting triangle, with what sampling it needs computed once.
+#[derive(Clone, Debug)]
+pub struct EmittingTriangle {
+    /// Its corners.
+    corners: [Vec3; 3],
+    /// Emitted radiance, W / (m^2 sr).
+    radiance: RgbSpectrum,
+    /// Whether both faces emit (meshes) or only the front (area lights).
+    both_sides: bool,
+    /// Its unit normal (corners counter-clockwise), zero when degenerate.
+    normal: Vec3,
+    /// Its area.
+    area: f32,
+    /// The largest coordinate of its corners (for offsetting photons that leave it).
+    scale: f32,
+}
+
+impl EmittingTriangle {
+    /// The triangle `corners` emitting `radiance` (W / (m^2 sr)) from its front, or from both
+    /// faces if `both_sides`.
+    pub fn new(corners: [Vec3; 3], radiance: RgbSpectrum, both_sides: bool) -> Self {
+        let cross = (corners[1] - corners[0]).cross(corners[2] - corners[0]);
+        EmittingTriangle {
+            corners,
+            radiance,
+            both_sides,
+            normal: cross.normalize_or_zero(),
+            area: 0.5 * cross.length(),
+            scale: corners.iter().map(|v| v.abs().max_element()).fold(0.0, f32::max),
+        }
+    }
+
+    /// Faces that emit: 1 or 2.
+    fn sides(&self) -> f32 {
+        if self.both_sides {
+            2.0
+        } else {
+            1.0
+        }
+    }
+
+    /// A uniform point on it.
+    fn point(&self, u: Vec2) -> Vec3 {
+        let b = square_to_triangle(u);
+        let c = &self.corners;
+        c[0] * (1.0 - b.x - b.y) + c[1] * b.x + c[2] * b.y
+    }
 }
 
 /// Light arriving at a point, sampled for next-event estimation.
@@ -126,23 +168,6 @@ fn disc_origin(sphere: &BoundingSphere, direction: Vec3, u: Vec2) -> Vec3 {
 }
 
 /// The largest coordinate of a triangle's corners.
-fn corners_scale(c: &[Vec3; 3]) -> f32 {
-    c.iter().map(|v| v.abs().max_element()).fold(0.0, f32::max)
-}
-
-fn triangle_area(c: &[Vec3; 3]) -> f32 {
-    0.5 * (c[1] - c[0]).cross(c[2] - c[0]).length()
-}
-
-fn triangle_normal(c: &[Vec3; 3]) -> Vec3 {
-    (c[1] - c[0]).cross(c[2] - c[0]).normalize_or_zero()
-}
-
-fn point_in_triangle(c: &[Vec3; 3], u: Vec2) -> Vec3 {
-    let b = square_to_triangle(u);
-    c[0] * (1.0 - b.x - b.y) + c[1] * b.x + c[2] * b.y
-}
-
 impl Light {
     /// Total emitted luminous power, for choosing lights in proportion to it.
     pub fn power(&self) -> f64 {
@@ -152,9 +177,8 @@ impl Light {
             Light::Sun { irradiance, sphere, .. } => {
                 irradiance.luminance() * f64::from(PI * sphere.radius * sphere.radius)
             }
-            Light::Triangle { corners, radiance, both_sides } => {
-                let sides = if *both_sides { 2.0 } else { 1.0 };
-                sides * radiance.luminance() * f64::from(PI * triangle_area(corners))
+            Light::Triangle(triangle) => {
+                f64::from(triangle.sides()) * triangle.radiance.luminance() * f64::from(PI * triangle.area)
             }
             Light::World(world) => {
                 let r = f64::from(world.sphere.radius);
@@ -190,14 +214,14 @@ impl Light {
                 let pdf = if disc.is_delta() { 0.0 } else { 1.0 / disc.solid_angle() };
                 Some(LightSample { wi, distance: f32::INFINITY, radiance_over_pdf, pdf })
             }
-            Light::Triangle { corners, radiance, .. } => {
-                let q = point_in_triangle(corners, u);
+            Light::Triangle(triangle) => {
+                let q = triangle.point(u);
                 let (wi, distance) = direction_and_distance(p, q)?;
                 let pdf = self.pdf_incident(p, wi, q);
                 if pdf <= 0.0 {
                     return None;
                 }
-                let radiance_over_pdf = spectral(radiance, lambda) / pdf;
+                let radiance_over_pdf = spectral(&triangle.radiance, lambda) / pdf;
                 Some(LightSample { wi, distance, radiance_over_pdf, pdf })
             }
             Light::World(world) => {
@@ -213,13 +237,13 @@ impl Light {
     /// light) or escapes (distant lights). Zero for delta lights.
     pub fn pdf_incident(&self, p: Vec3, wi: Vec3, q: Vec3) -> f32 {
         match self {
-            Light::Triangle { corners, both_sides, .. } => {
-                let cos_light = -triangle_normal(corners).dot(wi);
-                let cos_light = if *both_sides { cos_light.abs() } else { cos_light };
+            Light::Triangle(triangle) => {
+                let cos_light = -triangle.normal.dot(wi);
+                let cos_light = if triangle.both_sides { cos_light.abs() } else { cos_light };
                 if cos_light <= 0.0 {
                     return 0.0;
                 }
-                p.distance_squared(q) / (triangle_area(corners) * cos_light)
+                p.distance_squared(q) / (triangle.area * cos_light)
             }
             Light::Sun { direction, disc, .. } if !disc.is_delta() && disc.contains(-*direction, wi) => {
                 1.0 / disc.solid_angle()
@@ -277,12 +301,10 @@ impl Light {
                     flux: spectral(irradiance, lambda) * PI * sphere.radius * sphere.radius,
                 }
             }
-            Light::Triangle { corners, radiance, both_sides } => {
-                let mut n = triangle_normal(corners);
+            Light::Triangle(triangle) => {
+                let mut n = triangle.normal;
                 let mut u = u_direction;
-                let mut sides = 1.0;
-                if *both_sides {
-                    sides = 2.0;
+                if triangle.both_sides {
                     if u.x < 0.5 {
                         n = -n;
                         u.x *= 2.0;
@@ -294,14 +316,9 @@ impl Light {
                 let local = square_to_cosine_hemisphere(u);
                 let direction = (t * local.x + b * local.y + n * local.z).normalize();
                 EmittedPhoton {
-                    origin: offset_origin(
-                        point_in_triangle(corners, u_position),
-                        n,
-                        direction,
-                        corners_scale(corners),
-                    ),
+                    origin: offset_origin(triangle.point(u_position), n, direction, triangle.scale),
                     direction,
-                    flux: spectral(radiance, lambda) * PI * triangle_area(corners) * sides,
+                    flux: spectral(&triangle.radiance, lambda) * PI * triangle.area * triangle.sides(),
                 }
             }
             Light::World(world) => {
@@ -337,16 +354,8 @@ mod tests {
         let s = 1.0;
         let c = [Vec3::new(-s, -s, 1.0), Vec3::new(s, -s, 1.0), Vec3::new(s, s, 1.0), Vec3::new(-s, s, 1.0)];
         let lights = [
-            Light::Triangle {
-                corners: [c[0], c[2], c[1]],
-                radiance: RgbSpectrum::constant(1.0),
-                both_sides: false,
-            },
-            Light::Triangle {
-                corners: [c[0], c[3], c[2]],
-                radiance: RgbSpectrum::constant(1.0),
-                both_sides: false,
-            },
+            Light::Triangle(EmittingTriangle::new([c[0], c[2], c[1]], RgbSpectrum::constant(1.0), false)),
+            Light::Triangle(EmittingTriangle::new([c[0], c[3], c[2]], RgbSpectrum::constant(1.0), false)),
         ];
         let n = 40000;
         let mut irradiance = 0.0;

@@ -21,7 +21,7 @@ use std::sync::Arc;
 
 use glam::{Vec2, Vec3};
 
-use crate::accel::Bvh;
+use crate::accel::{Bvh, Hit};
 use crate::camera::Camera;
 use crate::lights::{BoundingSphere, Light};
 use crate::materials::{Material, ShadingFrame};
@@ -81,21 +81,19 @@ impl Geometry {
         self.triangles.iter().map(|t| t.vertices.map(|v| self.positions[v as usize])).collect()
     }
 
-    /// The surface at barycentric coordinates `b` (weights of corners 1 and 2) of triangle `i`.
-    fn surface(&self, i: usize, b: Vec2) -> Surface {
+    /// The surface at `hit` on triangle `i`: the point, geometric normal and scale come with
+    /// the hit; the shading normal, texture coordinates and material are looked up here.
+    fn surface(&self, i: usize, hit: &Hit) -> Surface {
         let t = self.triangles[i];
         let [i0, i1, i2] = t.vertices.map(|v| v as usize);
+        let b = hit.barycentric;
         let w = [1.0 - b.x - b.y, b.x, b.y];
-        let interpolate = |a: &[Vec3]| a[i0] * w[0] + a[i1] * w[1] + a[i2] * w[2];
-        let p = interpolate(&self.positions);
-        let ng = (self.positions[i1] - self.positions[i0])
-            .cross(self.positions[i2] - self.positions[i0])
-            .normalize_or_zero();
-        let n = interpolate(&self.normals).normalize_or_zero();
+        let n =
+            (self.normals[i0] * w[0] + self.normals[i1] * w[1] + self.normals[i2] * w[2]).normalize_or_zero();
+        let ng = hit.ng;
         let n = if n == Vec3::ZERO { ng } else { n };
         let uv = self.uvs[i0] * w[0] + self.uvs[i1] * w[1] + self.uvs[i2] * w[2];
-        let scale = [i0, i1, i2].iter().map(|&i| self.positions[i].abs().max_element()).fold(0.0, f32::max);
-        Surface { p, frame: ShadingFrame { n, ng }, uv, material: t.material, scale }
+        Surface { p: hit.p, frame: ShadingFrame { n, ng }, uv, material: t.material, scale: hit.scale }
     }
 
     /// The smallest and largest corner of the finite vertices, or `None` when there are none
@@ -166,12 +164,12 @@ impl Scene {
         self.fixed.triangles.len() + self.moving.triangles.len()
     }
 
-    /// The surface at barycentric coordinates `b` (weights of corners 1 and 2) of `triangle`.
-    pub fn surface(&self, triangle: u32, b: Vec2) -> Surface {
+    /// The surface where a ray hit.
+    pub fn surface(&self, hit: &Hit) -> Surface {
         let fixed = self.fixed.triangles.len();
-        match (triangle as usize).checked_sub(fixed) {
-            None => self.fixed.surface(triangle as usize, b),
-            Some(moving) => self.moving.surface(moving, b),
+        match (hit.triangle as usize).checked_sub(fixed) {
+            None => self.fixed.surface(hit.triangle as usize, hit),
+            Some(moving) => self.moving.surface(moving, hit),
         }
     }
 

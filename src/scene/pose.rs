@@ -13,7 +13,7 @@ use super::description::{Description, Lens, LensSettings, MeshInstance, Punctual
 use super::{bounding_sphere, Geometry, OpenEdges, Scene, DEFAULT_RADIUS_FRACTION, NOT_A_LIGHT};
 use crate::accel::Bvh;
 use crate::camera::Camera;
-use crate::lights::{BoundingSphere, Light};
+use crate::lights::{BoundingSphere, EmittingTriangle, Light};
 use crate::materials::Material;
 
 /// A span of glTF time, in seconds, that a render covers (frames and their shutters).
@@ -77,7 +77,7 @@ fn triangle_lights(
         let material = &materials[t.material as usize];
         if let Some(radiance) = material.emission {
             of_triangle[i] = (first_light + lights.len()) as u32;
-            lights.push(Light::Triangle { corners, radiance, both_sides: material.emits_both_sides });
+            lights.push(Light::Triangle(EmittingTriangle::new(corners, radiance, material.emits_both_sides)));
         }
     }
     (lights, of_triangle)

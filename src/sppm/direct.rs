@@ -135,7 +135,7 @@ impl DirectLight<'_> {
         if light == NOT_A_LIGHT {
             return DirectTerm::ZERO;
         }
-        let surface = scene.surface(hit.triangle, hit.barycentric);
+        let surface = scene.surface(&hit);
         let material = &scene.materials[surface.material as usize];
         let radiance = material.emitted(wavelengths, surface.frame.ng, -sample.wi);
         let value =

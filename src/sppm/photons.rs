@@ -104,7 +104,7 @@ pub fn continue_photon(
         let Some(hit) = hit else {
             break;
         };
-        let surface = scene.surface(hit.triangle, hit.barycentric);
+        let surface = scene.surface(&hit);
         let material = &scene.materials[surface.material as usize];
         let wo = -state.direction;
         let rng = &mut state.rng;
