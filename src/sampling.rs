@@ -26,7 +26,7 @@ fn mix(mut z: u64) -> u64 {
 /// The random stream for `(seed, stream, pass, index)`.
 pub fn stream(seed: u64, kind: Stream, pass: u64, index: u64) -> Sampler {
     let key = mix(mix(mix(seed ^ 0x9e37_79b9_7f4a_7c15) ^ kind as u64) ^ pass);
-    Sampler { pcg: Pcg32::new(mix(key ^ index), key | 1), sobol: None }
+    Sampler { pcg: Pcg32::new(mix(key ^ index), key | 1) }
 }
 
 /// Dimensions of a pixel's stream drawn from its pass-indexed Sobol sequence: the film and lens
@@ -41,7 +41,7 @@ const SOBOL_SEQUENCE: u64 = 1 << 16;
 /// lens points and light samples are stratified (as a sampler's samples per pixel are in Cycles):
 /// a light's edge or a highlight converges faster than with independent draws. Every point alone
 /// is uniform, so each pass's estimate stays unbiased; the rest of the stream is the pass's own.
-pub fn pixel_stream(seed: u64, pass: u64, pixel: u64) -> Sampler {
+pub fn pixel_stream(seed: u64, pass: u64, pixel: u64) -> PixelSampler {
     let key = mix(mix(seed ^ 0x736f_626f_6c00) ^ pixel) ^ (pass / SOBOL_SEQUENCE);
     let sobol = SobolPrefix {
         seed: mix(key) as u32,
@@ -49,7 +49,7 @@ pub fn pixel_stream(seed: u64, pass: u64, pixel: u64) -> Sampler {
         next_dimension: 0,
         four: [0.0; 4],
     };
-    Sampler { sobol: Some(sobol), ..stream(seed, Stream::Eye, pass, pixel) }
+    PixelSampler { sobol, rest: stream(seed, Stream::Eye, pass, pixel) }
 }
 
 /// Where a stream stands in its Sobol point (drawn four dimensions at a time, which
@@ -78,16 +78,37 @@ impl SobolPrefix {
 #[derive(Clone)]
 pub struct Sampler {
     pcg: Pcg32,
-    sobol: Option<SobolPrefix>,
 }
 
 impl Sampler {
     /// One uniform number in [0, 1).
     #[inline]
     pub fn next_1d(&mut self) -> f32 {
-        match &mut self.sobol {
-            Some(s) if s.next_dimension < PIXEL_SOBOL_DIMENSIONS => s.next(),
-            _ => self.pcg.random::<f32>(),
+        self.pcg.random::<f32>()
+    }
+
+    /// Two uniform numbers in [0, 1).
+    pub fn next_2d(&mut self) -> Vec2 {
+        Vec2::new(self.next_1d(), self.next_1d())
+    }
+}
+
+/// A pixel's stream: a Sobol prefix, then a [`Sampler`]'s numbers (photon paths, which draw
+/// from a `Sampler` alone, do not test at every draw whether a prefix is left).
+#[derive(Clone)]
+pub struct PixelSampler {
+    sobol: SobolPrefix,
+    rest: Sampler,
+}
+
+impl PixelSampler {
+    /// One uniform number in [0, 1).
+    #[inline]
+    pub fn next_1d(&mut self) -> f32 {
+        if self.sobol.next_dimension < PIXEL_SOBOL_DIMENSIONS {
+            self.sobol.next()
+        } else {
+            self.rest.next_1d()
         }
     }
 

@@ -7,7 +7,7 @@ use glam::Vec3;
 use super::renderer::{PassStats, Renderer, VisiblePoint};
 use crate::geometry::offset_origin;
 use crate::materials::{ShadingFrame, Transport};
-use crate::sampling::Sampler;
+use crate::sampling::PixelSampler;
 use crate::scene::NOT_A_LIGHT;
 use crate::spectrum::{SampledSpectrum, Wavelengths};
 
@@ -62,13 +62,13 @@ impl DirectTerm {
 
 impl DirectLight<'_> {
     /// One light-sampled and one BSDF-sampled term, to be combined by MIS (their sum).
-    pub fn estimate(&self, rng: &mut Sampler, stats: &mut PassStats) -> [DirectTerm; 2] {
+    pub fn estimate(&self, rng: &mut PixelSampler, stats: &mut PassStats) -> [DirectTerm; 2] {
         [self.light_sampled(rng, stats), self.bsdf_sampled(rng, stats)]
     }
 
     /// Direct light by sampling a light (chosen by power) and a point on it, weighted by multiple
     /// importance sampling against BSDF sampling (Veach 1997, chapter 9).
-    fn light_sampled(&self, rng: &mut Sampler, stats: &mut PassStats) -> DirectTerm {
+    fn light_sampled(&self, rng: &mut PixelSampler, stats: &mut PassStats) -> DirectTerm {
         let (renderer, point, wavelengths) = (self.renderer, self.point, self.wavelengths);
         let Some((index, p_choice)) = renderer.light_choice.sample(rng.next_1d()) else {
             return DirectTerm::ZERO;
@@ -103,7 +103,7 @@ impl DirectLight<'_> {
 
     /// Direct light by sampling the BSDF and looking at what emits along the sampled ray, weighted
     /// by multiple importance sampling against light sampling.
-    fn bsdf_sampled(&self, rng: &mut Sampler, stats: &mut PassStats) -> DirectTerm {
+    fn bsdf_sampled(&self, rng: &mut PixelSampler, stats: &mut PassStats) -> DirectTerm {
         let (renderer, point, wavelengths) = (self.renderer, self.point, self.wavelengths);
         let scene = renderer.scene;
         let (u, u_lobe) = (rng.next_2d(), rng.next_1d());

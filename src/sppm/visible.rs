@@ -11,7 +11,7 @@ use super::direct::{DirectLight, DirectTerm};
 use super::renderer::{PassSamples, PassStats, Renderer, VisiblePoint, MAX_DEPTH};
 use crate::geometry::offset_origin;
 use crate::materials::{Bsdf, Transport};
-use crate::sampling::{pixel_stream, Sampler};
+use crate::sampling::{pixel_stream, PixelSampler};
 use crate::spectrum::{hero_only, SampledSpectrum};
 
 /// A pixel's eye path: the radiance found along it, and its visible point if it has one.
@@ -39,7 +39,7 @@ pub struct EyeState {
     /// Segments traced before this one.
     pub depth: u32,
     /// The path's random stream, where this segment leaves it.
-    pub rng: Sampler,
+    pub rng: PixelSampler,
 }
 
 /// An eye path's end: its result, and the direct-light terms whose sum (times the throughput)
