@@ -34,14 +34,27 @@ impl PhotonGrid {
     }
 
     /// Calls `visit` with the range of sorted photons of every bucket within the 2 x 2 x 2 block
-    /// of cells around `p` (a superset of the photons within the radius; the caller checks
-    /// distances).
+    /// of cells around `p` that the sphere of radius `cell_size / 2` around `p` reaches (a
+    /// superset of the photons within that radius; the caller checks distances). About a third
+    /// of the block's cells lie out of reach of a point on a surface, with their photons.
     pub fn for_each_near(&self, p: Vec3, mut visit: impl FnMut(std::ops::Range<usize>)) {
         let buckets = self.bucket_start.len() - 1;
-        let base = (p / self.cell_size - 0.5).floor().as_ivec3();
+        let scaled = p / self.cell_size;
+        let base = (scaled - 0.5).floor();
+        // Per axis, how far `p` lies beyond the lower cell (into the upper one) and short of
+        // the upper cell, in cells: the sphere reaches a cell when these add up, squared, to
+        // less than a quarter.
+        let into_upper = (scaled - base - Vec3::ONE).max(Vec3::ZERO);
+        let short_of_upper = (base + Vec3::ONE - scaled).max(Vec3::ZERO);
+        let base = base.as_ivec3();
         let mut seen = [usize::MAX; 8];
-        for (k, offset) in (0..8).map(|k| IVec3::new(k & 1, (k >> 1) & 1, k >> 2)).enumerate() {
-            let b = hash_cell(base + offset, buckets);
+        for k in 0..8 {
+            let upper = [k & 1 != 0, (k >> 1) & 1 != 0, (k >> 2) & 1 != 0];
+            let gap = Vec3::select(glam::BVec3::from(upper), short_of_upper, into_upper);
+            if gap.length_squared() >= 0.25 {
+                continue;
+            }
+            let b = hash_cell(base + IVec3::from(upper.map(i32::from)), buckets);
             if seen[..k].contains(&b) {
                 continue;
             }
