@@ -37,6 +37,8 @@ pub struct Hit {
 /// The nearest triangle along a ray of one BVH, as traversal finds it.
 #[derive(Clone, Copy, Debug)]
 struct Nearest {
+    /// Where the triangle is among the BVH's leaves.
+    slot: u32,
     /// Index of the triangle in the BVH's list.
     triangle: u32,
     /// Distance along the ray, in the BVH's working coordinates.
@@ -54,11 +56,12 @@ struct Nearest {
 /// costs would overflow.
 pub struct Bvh {
     bvh: Option<CwBvh>,
-    /// The triangles, in working coordinates.
+    /// The triangles in working coordinates, in the order of the BVH's leaves (its primitive
+    /// slots), so that the triangle test reads them without going through the slot's index.
     triangles: Vec<Triangle>,
     /// Working coordinates over world coordinates (a power of two).
     scale: f32,
-    /// Per triangle, whether it blocks shadow rays.
+    /// Per slot, whether its triangle blocks shadow rays.
     casts_shadow: Vec<bool>,
 }
 
@@ -133,6 +136,7 @@ impl Accel {
         rays.iter().filter(|r| answer(r)).count()
     }
 
+    #[inline]
     fn note(&self, origin: Vec3, direction: Vec3, t_max: f32, query: Query) {
         if let Some(recorder) = &self.recorder {
             recorder.lock().expect("recorder").push(RecordedRay { origin, direction, t_max, query });
@@ -219,10 +223,17 @@ impl Bvh {
             .map(|c| if c.iter().all(|v| v.is_finite()) { c } else { [Vec3::ZERO; 3] })
             .map(|c| Triangle { v0: c[0].into(), v1: c[1].into(), v2: c[2].into() })
             .collect();
-        let bvh = (!triangles.is_empty()).then(|| {
-            build_cwbvh_from_tris(&triangles, BvhBuildParams::medium_build(), &mut Duration::default())
-        });
-        Bvh { bvh, triangles, scale, casts_shadow: casts_shadow.to_vec() }
+        if triangles.is_empty() {
+            return Bvh { bvh: None, triangles, scale, casts_shadow: Vec::new() };
+        }
+        let bvh = build_cwbvh_from_tris(&triangles, BvhBuildParams::medium_build(), &mut Duration::default());
+        let in_slots = |i: &u32| *i as usize;
+        Bvh {
+            triangles: bvh.primitive_indices.iter().map(in_slots).map(|i| triangles[i]).collect(),
+            casts_shadow: bvh.primitive_indices.iter().map(in_slots).map(|i| casts_shadow[i]).collect(),
+            bvh: Some(bvh),
+            scale,
+        }
     }
 
     /// The obvhs ray, in working coordinates, for a world-space ray.
@@ -240,9 +251,9 @@ impl Bvh {
         let bvh = self.bvh.as_ref()?;
         let ray = self.ray(origin, direction, t_max);
         let mut hit = RayHit::none();
-        let found =
-            bvh.ray_traverse(ray, &mut hit, |ray, slot| self.hit_distance(bvh, ray, slot, opaque_only));
-        found.then(|| Nearest { triangle: bvh.primitive_indices[hit.primitive_id as usize], t: hit.t })
+        let found = bvh.ray_traverse(ray, &mut hit, |ray, slot| self.hit_distance(ray, slot, opaque_only));
+        let slot = hit.primitive_id;
+        found.then(|| Nearest { slot, triangle: bvh.primitive_indices[slot as usize], t: hit.t })
     }
 
     /// The hit at `nearest` along the ray from `origin` in the unit `direction`, in world
@@ -251,20 +262,22 @@ impl Bvh {
     /// are world coordinates times a power of two, so every figure is the same bits as from the
     /// world corners.
     fn hit(&self, nearest: Nearest, origin: Vec3, direction: Vec3) -> Hit {
-        let corners = &self.triangles[nearest.triangle as usize];
+        let corners = &self.triangles[nearest.slot as usize];
         let [v0, v1, v2] = [corners.v0, corners.v1, corners.v2].map(Vec3::from);
         let normal = (v1 - v0).cross(v2 - v0);
         let at = origin * self.scale + direction * nearest.t;
         let barycentric = barycentric(v0, v1 - v0, v2 - v0, normal, at);
         let w = [1.0 - barycentric.x - barycentric.y, barycentric.x, barycentric.y];
         let largest = v0.abs().max_element().max(v1.abs().max_element()).max(v2.abs().max_element());
+        // The inverse of a power of two: multiplying by it is dividing, exactly.
+        let to_world = self.scale.recip();
         Hit {
             triangle: nearest.triangle,
-            t: nearest.t / self.scale,
+            t: nearest.t * to_world,
             barycentric,
-            p: (v0 * w[0] + v1 * w[1] + v2 * w[2]) / self.scale,
+            p: (v0 * w[0] + v1 * w[1] + v2 * w[2]) * to_world,
             ng: normal.normalize_or_zero(),
-            scale: largest / self.scale,
+            scale: largest * to_world,
         }
     }
 
@@ -275,17 +288,16 @@ impl Bvh {
             return false;
         };
         let ray = self.ray(origin, direction, t_max);
-        !bvh.ray_traverse_miss(ray, |ray, slot| self.hit_distance(bvh, ray, slot, true))
+        !bvh.ray_traverse_miss(ray, |ray, slot| self.hit_distance(ray, slot, true))
     }
 
     /// The distance to the triangle in `slot` along `ray`; infinite for triangles that cast no
     /// shadow when `opaque_only`.
-    fn hit_distance(&self, bvh: &CwBvh, ray: &Ray, slot: usize, opaque_only: bool) -> f32 {
-        let triangle = bvh.primitive_indices[slot] as usize;
-        if opaque_only && !self.casts_shadow[triangle] {
+    fn hit_distance(&self, ray: &Ray, slot: usize, opaque_only: bool) -> f32 {
+        if opaque_only && !self.casts_shadow[slot] {
             return f32::INFINITY;
         }
-        self.triangles[triangle].intersect(ray)
+        self.triangles[slot].intersect(ray)
     }
 }
 
