@@ -198,6 +198,21 @@ impl Bsdf {
         matches!(self, Bsdf::Conductor { .. } | Bsdf::Dielectric { .. } | Bsdf::ThinDielectric { .. })
     }
 
+    /// Whether [`Bsdf::sample`] reads its `u_lobe` (a dielectric's choice between reflection and
+    /// refraction); paths draw that number only then.
+    pub fn picks_lobe(&self) -> bool {
+        matches!(self, Bsdf::Dielectric { .. } | Bsdf::ThinDielectric { .. })
+    }
+
+    /// A uniform number for [`Bsdf::sample`]'s `u_lobe` from `draw`, drawn only when read.
+    pub fn lobe_number(&self, draw: impl FnOnce() -> f32) -> f32 {
+        if self.picks_lobe() {
+            draw()
+        } else {
+            0.0
+        }
+    }
+
     /// The BSDF value `f(wo, wi)` (zero for delta lobes) with shading normal `n`.
     pub fn eval(&self, n: Vec3, wo: Vec3, wi: Vec3) -> SampledSpectrum {
         match *self {

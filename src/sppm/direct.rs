@@ -106,7 +106,8 @@ impl DirectLight<'_> {
     fn bsdf_sampled(&self, rng: &mut PixelSampler, stats: &mut PassStats) -> DirectTerm {
         let (renderer, point, wavelengths) = (self.renderer, self.point, self.wavelengths);
         let scene = renderer.scene;
-        let (u, u_lobe) = (rng.next_2d(), rng.next_1d());
+        let u = rng.next_2d();
+        let u_lobe = point.bsdf.lobe_number(|| rng.next_1d());
         let Some(sample) = point.bsdf.sample(point.frame, point.wo, u, u_lobe, Transport::Radiance) else {
             return DirectTerm::ZERO;
         };

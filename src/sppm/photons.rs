@@ -114,9 +114,9 @@ pub fn continue_photon(
             out.push(Photon { p: surface.p, wi: wo, ng, flux: state.flux, hero_only: state.hero_only });
             stats.photons_stored += 1;
         }
-        let Some(sample) =
-            bsdf.sample(surface.frame, wo, rng.next_2d(), rng.next_1d(), Transport::Importance)
-        else {
+        let u = rng.next_2d();
+        let u_lobe = bsdf.lobe_number(|| rng.next_1d());
+        let Some(sample) = bsdf.sample(surface.frame, wo, u, u_lobe, Transport::Importance) else {
             break;
         };
         // Russian roulette with the throughput's change (its mean over the wavelengths) as the

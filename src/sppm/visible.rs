@@ -140,8 +140,9 @@ pub fn continue_eye_path(
             point = Some(visible);
             break;
         }
-        let Some(sample) = bsdf.sample(surface.frame, wo, rng.next_2d(), rng.next_1d(), Transport::Radiance)
-        else {
+        let u = rng.next_2d();
+        let u_lobe = bsdf.lobe_number(|| rng.next_1d());
+        let Some(sample) = bsdf.sample(surface.frame, wo, u, u_lobe, Transport::Radiance) else {
             break;
         };
         if !state.hero_only && material.separates_wavelengths(&bsdf) {
