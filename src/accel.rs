@@ -9,7 +9,7 @@
 use std::sync::{Arc, Mutex};
 use std::time::Duration;
 
-use glam::{Vec2, Vec3};
+use glam::{Vec2, Vec3, Vec3A};
 use obvhs::{
     cwbvh::{builder::build_cwbvh_from_tris, CwBvh},
     ray::{Ray, RayHit},
@@ -262,21 +262,21 @@ impl Bvh {
     /// are world coordinates times a power of two, so every figure is the same bits as from the
     /// world corners.
     fn hit(&self, nearest: Nearest, origin: Vec3, direction: Vec3) -> Hit {
-        let corners = &self.triangles[nearest.slot as usize];
-        let [v0, v1, v2] = [corners.v0, corners.v1, corners.v2].map(Vec3::from);
+        // In SIMD vectors (the corners are stored so), converted once at the end.
+        let Triangle { v0, v1, v2 } = self.triangles[nearest.slot as usize];
         let normal = (v1 - v0).cross(v2 - v0);
-        let at = origin * self.scale + direction * nearest.t;
+        let at = Vec3A::from(origin) * self.scale + Vec3A::from(direction) * nearest.t;
         let barycentric = barycentric(v0, v1 - v0, v2 - v0, normal, at);
         let w = [1.0 - barycentric.x - barycentric.y, barycentric.x, barycentric.y];
-        let largest = v0.abs().max_element().max(v1.abs().max_element()).max(v2.abs().max_element());
+        let largest = v0.abs().max(v1.abs()).max(v2.abs()).max_element();
         // The inverse of a power of two: multiplying by it is dividing, exactly.
         let to_world = self.scale.recip();
         Hit {
             triangle: nearest.triangle,
             t: nearest.t * to_world,
             barycentric,
-            p: (v0 * w[0] + v1 * w[1] + v2 * w[2]) * to_world,
-            ng: normal.normalize_or_zero(),
+            p: ((v0 * w[0] + v1 * w[1] + v2 * w[2]) * to_world).into(),
+            ng: normal.normalize_or_zero().into(),
             scale: largest * to_world,
         }
     }
@@ -303,7 +303,7 @@ impl Bvh {
 
 /// The barycentric coordinates (weights of v1 and v2) of `p`, a point on the triangle with
 /// corner `v0`, edges `e1` and `e2` from it, and normal `n = e1 x e2`.
-fn barycentric(v0: Vec3, e1: Vec3, e2: Vec3, n: Vec3, p: Vec3) -> Vec2 {
+fn barycentric(v0: Vec3A, e1: Vec3A, e2: Vec3A, n: Vec3A, p: Vec3A) -> Vec2 {
     let inv = 1.0 / n.length_squared();
     let d = p - v0;
     let b1 = d.cross(e2).dot(n) * inv;
