@@ -1,10 +1,10 @@
 //! Lambertian reflection: `f = albedo / pi` on the side of `wo`.
 
-use glam::{Vec2, Vec3, Vec4};
+use glam::{Vec2, Vec3, Vec3A, Vec4};
 use std::f32::consts::FRAC_1_PI;
 
 use super::{face_toward, BsdfSample};
-use crate::sampling::{basis, square_to_cosine_hemisphere};
+use crate::sampling::square_to_cosine_hemisphere;
 use crate::spectrum::SampledSpectrum;
 
 /// `albedo / pi` when `wo` and `wi` are on the same side of `n`, else zero.
@@ -27,9 +27,9 @@ pub fn pdf(n: Vec3, wo: Vec3, wi: Vec3) -> f32 {
 
 /// Cosine-weighted reflection on the side of `wo`: the weight is the albedo.
 pub fn sample(albedo: SampledSpectrum, n: Vec3, wo: Vec3, u: Vec2) -> Option<BsdfSample> {
-    let n = face_toward(n, wo);
-    let (t, b) = basis(n);
+    let n = Vec3A::from(face_toward(n, wo));
+    let (t, b) = n.any_orthonormal_pair();
     let local = square_to_cosine_hemisphere(u);
-    let wi = (t * local.x + b * local.y + n * local.z).normalize();
+    let wi = Vec3::from((t * local.x + b * local.y + n * local.z).normalize());
     Some(BsdfSample { pdf: local.z * FRAC_1_PI, wi, weight: albedo, is_delta: false })
 }

@@ -19,7 +19,7 @@ mod shapes;
 use std::path::{Path, PathBuf};
 use std::sync::Arc;
 
-use glam::{Vec2, Vec3};
+use glam::{Vec2, Vec3, Vec3A};
 
 use crate::accel::{Bvh, Hit};
 use crate::camera::Camera;
@@ -88,8 +88,8 @@ impl Geometry {
         let [i0, i1, i2] = t.vertices.map(|v| v as usize);
         let b = hit.barycentric;
         let w = [1.0 - b.x - b.y, b.x, b.y];
-        let n =
-            (self.normals[i0] * w[0] + self.normals[i1] * w[1] + self.normals[i2] * w[2]).normalize_or_zero();
+        let normal = |i: usize| Vec3A::from(self.normals[i]);
+        let n = Vec3::from((normal(i0) * w[0] + normal(i1) * w[1] + normal(i2) * w[2]).normalize_or_zero());
         let ng = hit.ng;
         let n = if n == Vec3::ZERO { ng } else { n };
         let uv = self.uvs[i0] * w[0] + self.uvs[i1] * w[1] + self.uvs[i2] * w[2];
