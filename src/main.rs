@@ -8,6 +8,7 @@ fn main() -> std::process::ExitCode {
         eprintln!("caustic: this build needs an x86-64 CPU with SSE4.2 and POPCNT (x86-64-v2, see .cargo/config.toml); rebuild without that setting for this one");
         return std::process::ExitCode::FAILURE;
     }
+    caustic::memory::prefer_small_pages();
     caustic::cli::main()
 }
 
