@@ -314,7 +314,8 @@ impl Light {
                 }
                 let (t, b) = basis(n);
                 let local = square_to_cosine_hemisphere(u);
-                let direction = (t * local.x + b * local.y + n * local.z).normalize();
+                // Unit to rounding (an orthonormal basis, a unit local direction).
+                let direction = t * local.x + b * local.y + n * local.z;
                 EmittedPhoton {
                     origin: offset_origin(triangle.point(u_position), n, direction, triangle.scale),
                     direction,

@@ -30,6 +30,7 @@ pub fn sample(albedo: SampledSpectrum, n: Vec3, wo: Vec3, u: Vec2) -> Option<Bsd
     let n = Vec3A::from(face_toward(n, wo));
     let (t, b) = n.any_orthonormal_pair();
     let local = square_to_cosine_hemisphere(u);
-    let wi = Vec3::from((t * local.x + b * local.y + n * local.z).normalize());
+    // Unit to rounding (an orthonormal basis, a unit local direction): not normalised again.
+    let wi = Vec3::from(t * local.x + b * local.y + n * local.z);
     Some(BsdfSample { pdf: local.z * FRAC_1_PI, wi, weight: albedo, is_delta: false })
 }
