@@ -157,25 +157,25 @@ impl Accel {
     }
 
     fn closest(&self, origin: Vec3, direction: Vec3, t_max: f32, opaque_only: bool) -> Option<Hit> {
-        let (bvh, nearest) = self.nearest(origin, direction, t_max, opaque_only)?;
+        let (bvh, nearest, first_triangle) = self.nearest(origin, direction, t_max, opaque_only)?;
         let hit = bvh.hit(nearest, origin, direction);
-        let first = if std::ptr::eq(bvh, &self.moving) { self.fixed_count } else { 0 };
-        Some(Hit { triangle: hit.triangle + first, ..hit })
+        Some(Hit { triangle: hit.triangle + first_triangle, ..hit })
     }
 
-    /// The nearest triangle along the ray, and the BVH it is in (traversal alone).
+    /// The nearest triangle along the ray (traversal alone): the BVH it is in, where in it, and
+    /// the scene's number of that BVH's first triangle.
     fn nearest(
         &self,
         origin: Vec3,
         direction: Vec3,
         t_max: f32,
         opaque_only: bool,
-    ) -> Option<(&Bvh, Nearest)> {
+    ) -> Option<(&Bvh, Nearest, u32)> {
         let fixed = self.fixed.nearest(origin, direction, t_max, opaque_only);
         let t_fixed = fixed.map_or(t_max, |n| n.t / self.fixed.scale);
         match self.moving.nearest(origin, direction, t_fixed, opaque_only) {
-            Some(moving) => Some((&self.moving, moving)),
-            None => fixed.map(|f| (&*self.fixed, f)),
+            Some(moving) => Some((&self.moving, moving, self.fixed_count)),
+            None => fixed.map(|f| (&*self.fixed, f, 0)),
         }
     }
 

@@ -167,7 +167,6 @@ fn disc_origin(sphere: &BoundingSphere, direction: Vec3, u: Vec2) -> Vec3 {
     sphere.centre - direction * sphere.radius + t * d.x + b * d.y
 }
 
-/// The largest coordinate of a triangle's corners.
 impl Light {
     /// Total emitted luminous power, for choosing lights in proportion to it.
     pub fn power(&self) -> f64 {

@@ -200,7 +200,7 @@ impl Bsdf {
 
     /// Whether [`Bsdf::sample`] reads its `u_lobe` (a dielectric's choice between reflection and
     /// refraction); paths draw that number only then.
-    pub fn picks_lobe(&self) -> bool {
+    fn picks_lobe(&self) -> bool {
         matches!(self, Bsdf::Dielectric { .. } | Bsdf::ThinDielectric { .. })
     }
 
