@@ -9,6 +9,7 @@
 use std::sync::{Arc, Mutex};
 use std::time::Duration;
 
+use crate::geometry::corners_scale;
 use glam::{Vec2, Vec3, Vec3A};
 use obvhs::{
     cwbvh::{builder::build_cwbvh_from_tris, CwBvh},
@@ -268,7 +269,7 @@ impl Bvh {
         let at = Vec3A::from(origin) * self.scale + Vec3A::from(direction) * nearest.t;
         let barycentric = barycentric(v0, v1 - v0, v2 - v0, normal, at);
         let w = [1.0 - barycentric.x - barycentric.y, barycentric.x, barycentric.y];
-        let largest = v0.abs().max(v1.abs()).max(v2.abs()).max_element();
+        let largest = corners_scale([v0, v1, v2]);
         // The inverse of a power of two: multiplying by it is dividing, exactly.
         let to_world = self.scale.recip();
         Hit {

@@ -6,7 +6,7 @@
 //! Near the origin, where ULPs vanish, the offset follows the size of the coordinates the point
 //! was computed from instead.
 
-use glam::{IVec3, Vec3};
+use glam::{IVec3, Vec3, Vec3A};
 
 /// A ray origin moved off the surface at `p` (geometric normal `ng`) to the side of `direction`,
 /// by a few ULPs of `p`'s coordinates (Wächter & Binder 2019, "A Fast and Robust Method for
@@ -31,6 +31,12 @@ pub fn offset_origin(p: Vec3, ng: Vec3, direction: Vec3, scale: f32) -> Vec3 {
         }
     };
     Vec3::new(offset(p.x, n.x), offset(p.y, n.y), offset(p.z, n.z))
+}
+
+/// The largest coordinate of a triangle's corners: the size of the coordinates its points are
+/// computed from, as [`offset_origin`] takes it.
+pub fn corners_scale([a, b, c]: [Vec3A; 3]) -> f32 {
+    a.abs().max(b.abs()).max(c.abs()).max_element()
 }
 
 /// The bucket of grid cell `cell` among `buckets` (Teschner et al. 2003's spatial hash).

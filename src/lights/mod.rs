@@ -14,10 +14,10 @@ mod world;
 
 pub use world::World;
 
-use glam::{Vec2, Vec3};
+use glam::{Vec2, Vec3, Vec3A};
 use std::f32::consts::PI;
 
-use crate::geometry::{offset_origin, one_minus_cos_between, Cone};
+use crate::geometry::{corners_scale, offset_origin, one_minus_cos_between, Cone};
 use crate::sampling::{
     basis, square_to_cone, square_to_cosine_hemisphere, square_to_disc, square_to_sphere, square_to_triangle,
 };
@@ -100,7 +100,7 @@ impl EmittingTriangle {
             both_sides,
             normal: cross.normalize_or_zero(),
             area: 0.5 * cross.length(),
-            scale: corners.iter().map(|v| v.abs().max_element()).fold(0.0, f32::max),
+            scale: corners_scale(corners.map(Vec3A::from)),
         }
     }
 
