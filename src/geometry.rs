@@ -51,19 +51,22 @@ pub fn hash_cell(cell: IVec3, buckets: usize) -> usize {
 /// `bucket_of[i]` is item `i`'s bucket among `buckets`. Gives where each bucket starts in the
 /// sorted order (`buckets + 1` entries) and the item at each sorted place.
 pub fn sort_into_buckets(bucket_of: &[u32], buckets: usize) -> (Vec<u32>, Vec<u32>) {
-    let mut bucket_start = vec![0u32; buckets + 1];
+    // Counted two places up, summed, then counted back up one place up while placing: each
+    // bucket's entry ends at its start (one array, no copy of it for the places).
+    let mut bucket_start = vec![0u32; buckets + 2];
     for &b in bucket_of {
-        bucket_start[b as usize + 1] += 1;
+        bucket_start[b as usize + 2] += 1;
     }
-    for i in 1..=buckets {
+    for i in 2..=buckets + 1 {
         bucket_start[i] += bucket_start[i - 1];
     }
-    let mut next = bucket_start.clone();
     let mut order = vec![0u32; bucket_of.len()];
     for (i, &b) in bucket_of.iter().enumerate() {
-        order[next[b as usize] as usize] = i as u32;
-        next[b as usize] += 1;
+        let next = &mut bucket_start[b as usize + 1];
+        order[*next as usize] = i as u32;
+        *next += 1;
     }
+    bucket_start.pop();
     (bucket_start, order)
 }
 
@@ -113,4 +116,18 @@ impl Cone {
 /// `1 - cos` of the angle between unit vectors, exact for small angles: `|a - b|^2 / 2`.
 pub fn one_minus_cos_between(a: Vec3, b: Vec3) -> f32 {
     (a - b).length_squared() / 2.0
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn sorts_into_buckets_keeping_item_order_within_each() {
+        let bucket_of = [2, 0, 2, 3, 0, 2];
+        let (bucket_start, order) = sort_into_buckets(&bucket_of, 5);
+        assert_eq!(bucket_start, [0, 2, 2, 5, 6, 6]);
+        assert_eq!(order, [1, 4, 0, 2, 5, 3]);
+        assert_eq!(sort_into_buckets(&[], 1), (vec![0, 0], vec![]));
+    }
 }

@@ -1,20 +1,30 @@
 //! A hash grid over the pass's photons (Hachisuka & Jensen 2009's SPPM uses one over hit points;
 //! gathering per pixel from photons keeps the result independent of thread timing).
 //!
-//! Cells are `2 r` wide, so the photons within `r` of a point lie in the 2 x 2 x 2 cells around
-//! it. Photons are sorted by bucket with a counting sort in photon order (deterministic); the
-//! caller keeps its photons in that order, so a bucket's photons lie side by side in memory.
+//! Cells are `2 r` wide and hashed into buckets; each cell is split into its eight octants, `r`
+//! wide, and a bucket's photons are sorted by octant. The photons within `r` of a point lie in
+//! the 3 x 3 x 3 octants around the point's own, which lie in the 2 x 2 x 2 cells around it: a
+//! lookup hashes those eight cells and reads only the octants the sphere reaches, about half the
+//! surface that whole cells of `2 r` would cover, from the same few places in memory. Photons are
+//! sorted with a counting sort in photon order (deterministic); the caller keeps its photons in
+//! that order, so a bucket's photons lie side by side in memory, octant after octant.
 
-use glam::{IVec3, Vec3};
+use glam::{IVec3, Vec3, Vec4};
+use std::ops::Range;
 
 use crate::geometry::{hash_cell, sort_into_buckets};
 use rayon::prelude::*;
 
-/// Buckets of hashed grid cells over photons sorted by bucket: bucket `b` holds the sorted
-/// photons `bucket_start[b]..bucket_start[b + 1]`.
+/// Octants of a cell: `x + 2 y + 4 z`, each 0 or 1.
+const OCTANTS: usize = 8;
+
+/// Buckets of hashed grid cells over photons sorted by bucket and octant: octant `o` of bucket
+/// `b` holds the sorted photons `start[8 b + o]..start[8 b + o + 1]`.
 pub struct PhotonGrid {
-    cell_size: f32,
-    bucket_start: Vec<u32>,
+    /// The width of an octant: the lookup radius.
+    octant_size: f32,
+    buckets: usize,
+    start: Vec<u32>,
 }
 
 impl PhotonGrid {
@@ -22,46 +32,89 @@ impl PhotonGrid {
     /// the photons in (the index in `positions` of each sorted photon). Each photon's bucket is
     /// found in parallel; the counting sort that follows is serial, in photon order.
     pub fn build(positions: &[Vec3], radius: f32) -> (Self, Vec<u32>) {
-        let cell_size = 2.0 * radius;
-        let buckets = (2 * positions.len()).max(1);
-        let bucket_of: Vec<u32> = positions
+        let buckets = (positions.len() / 2).max(1);
+        let key_of: Vec<u32> = positions
             .par_iter()
             .with_min_len(4096)
-            .map(|&p| hash_cell((p / cell_size).floor().as_ivec3(), buckets) as u32)
+            .map(|&p| {
+                let octant = (p / radius).floor().as_ivec3();
+                let b = hash_cell(cell_of(octant), buckets);
+                (b * OCTANTS + octant_number(octant & IVec3::ONE)) as u32
+            })
             .collect();
-        let (bucket_start, order) = sort_into_buckets(&bucket_of, buckets);
-        (PhotonGrid { cell_size, bucket_start }, order)
+        let (start, order) = sort_into_buckets(&key_of, buckets * OCTANTS);
+        (PhotonGrid { octant_size: radius, buckets, start }, order)
     }
 
-    /// Calls `visit` with the range of sorted photons of every bucket within the 2 x 2 x 2 block
-    /// of cells around `p` that the sphere of radius `cell_size / 2` around `p` reaches (a
-    /// superset of the photons within that radius; the caller checks distances). About a third
-    /// of the block's cells lie out of reach of a point on a surface, with their photons.
-    pub fn for_each_near(&self, p: Vec3, mut visit: impl FnMut(std::ops::Range<usize>)) {
-        let buckets = self.bucket_start.len() - 1;
-        let scaled = p / self.cell_size;
-        let base = (scaled - 0.5).floor();
-        // Per axis, how far `p` lies beyond the lower cell (into the upper one) and short of
-        // the upper cell, in cells: the sphere reaches a cell when these add up, squared, to
-        // less than a quarter.
-        let into_upper = (scaled - base - Vec3::ONE).max(Vec3::ZERO);
-        let short_of_upper = (base + Vec3::ONE - scaled).max(Vec3::ZERO);
-        let base = base.as_ivec3();
-        let mut seen = [usize::MAX; 8];
+    /// Calls `visit` with ranges of sorted photons that together hold every photon within the
+    /// radius of `p`, each once (a superset: the caller checks distances). These are the octants
+    /// that the sphere around `p` reaches, neighbours in memory joined into one range.
+    pub fn for_each_near(&self, p: Vec3, mut visit: impl FnMut(Range<usize>)) {
+        let scaled = p / self.octant_size;
+        let floor = scaled.floor();
+        let own = floor.as_ivec3();
+        // The 3 x 3 x 3 octants around `p`'s own lie in two cells per axis, from `first_cell`.
+        let first_cell = cell_of(own - IVec3::ONE);
+        // Per axis, the squared gap from `p` to each octant of the two cells (infinite where the
+        // octant is not one of the three around `p`'s own), in octants.
+        let below = scaled - floor;
+        let above = Vec3::ONE - below;
+        let gaps: [Vec4; 3] = std::array::from_fn(|axis| {
+            Vec4::from_array(std::array::from_fn(|slot| {
+                match 2 * first_cell[axis] + slot as i32 - own[axis] {
+                    -1 => below[axis] * below[axis],
+                    0 => 0.0,
+                    1 => above[axis] * above[axis],
+                    _ => f32::INFINITY,
+                }
+            }))
+        });
+        // Bit `x + 4 y + 16 z` is set where the octant in slot (x, y, z) is within reach.
+        let mut within = 0u64;
+        for z in 0..4 {
+            for y in 0..4 {
+                let mask = (gaps[0] + (gaps[1][y] + gaps[2][z])).cmplt(Vec4::ONE).bitmask();
+                within |= u64::from(mask) << (4 * y + 16 * z);
+            }
+        }
+        let mut cells = [(usize::MAX, 0u32); 8];
         for k in 0..8 {
-            let upper = [k & 1 != 0, (k >> 1) & 1 != 0, (k >> 2) & 1 != 0];
-            let gap = Vec3::select(glam::BVec3::from(upper), short_of_upper, into_upper);
-            if gap.length_squared() >= 0.25 {
-                continue;
+            let corner = IVec3::new(k & 1, (k >> 1) & 1, (k >> 2) & 1);
+            let reached = octants_of(within >> (2 * corner.x + 8 * corner.y + 32 * corner.z));
+            let b = hash_cell(first_cell + corner, self.buckets);
+            // Two cells in one bucket share its octants: each is read once.
+            match cells[..k as usize].iter_mut().find(|(other, _)| *other == b) {
+                Some(earlier) => earlier.1 |= reached,
+                None => cells[k as usize] = (b, reached),
             }
-            let b = hash_cell(base + IVec3::from(upper.map(i32::from)), buckets);
-            if seen[..k].contains(&b) {
-                continue;
+        }
+        for (b, mut reached) in cells {
+            while reached != 0 {
+                let first = reached.trailing_zeros();
+                let run = (reached >> first).trailing_ones();
+                let key = b * OCTANTS + first as usize;
+                visit(self.start[key] as usize..self.start[key + run as usize] as usize);
+                reached &= !(((1u32 << run) - 1) << first);
             }
-            seen[k] = b;
-            visit(self.bucket_start[b] as usize..self.bucket_start[b + 1] as usize);
         }
     }
+}
+
+/// The octants of one cell from bits `x + 4 y + 16 z` of the 4 x 4 x 4 slots, shifted to the
+/// cell's corner: bits 0, 1, 4, 5, 16, 17, 20, 21 become octants 0 to 7.
+fn octants_of(slots: u64) -> u32 {
+    let s = slots as u32;
+    (s & 0x3) | ((s >> 2) & 0xC) | ((s >> 12) & 0x30) | ((s >> 14) & 0xC0)
+}
+
+/// The cell of `2 r` that holds the octant `octant` (floor division by two).
+fn cell_of(octant: IVec3) -> IVec3 {
+    octant >> IVec3::ONE
+}
+
+/// The number of the octant at `bits` (each 0 or 1) within its cell.
+fn octant_number(bits: IVec3) -> usize {
+    (bits.x + 2 * bits.y + 4 * bits.z) as usize
 }
 
 #[cfg(test)]
