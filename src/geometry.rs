@@ -44,7 +44,10 @@ pub fn hash_cell(cell: IVec3, buckets: usize) -> usize {
     let h = (cell.x as u32).wrapping_mul(73_856_093)
         ^ (cell.y as u32).wrapping_mul(19_349_663)
         ^ (cell.z as u32).wrapping_mul(83_492_791);
-    h as usize % buckets
+    // In place of a division: Fibonacci hashing mixes every bit of `h` into the high bits, which
+    // Lemire's multiply-shift scales to `buckets`.
+    let mixed = h.wrapping_mul(0x9e37_79b9);
+    ((u64::from(mixed) * buckets as u64) >> 32) as usize
 }
 
 /// Items sorted by bucket with a counting sort, in item order within a bucket (deterministic):

@@ -223,22 +223,45 @@ impl Sorted {
         Sorted { p: [column(0), column(1), column(2)], arrivals: padded.map(Arrival::of).collect() }
     }
 
-    fn at(&self, i: usize) -> Vec3 {
-        Vec3::new(self.p[0][i], self.p[1][i], self.p[2][i])
+    /// The photons of `range` in groups of four, the last padded.
+    fn groups(&self, range: Range<usize>) -> impl Iterator<Item = Group<'_>> {
+        let padded = range.start..range.start + range.len().next_multiple_of(4);
+        let [x, y, z] = self.p.each_ref().map(|column| column[padded.clone()].chunks_exact(4));
+        let arrivals = self.arrivals[padded.clone()].chunks_exact(4);
+        x.zip(y).zip(z).zip(arrivals).enumerate().map(move |(g, (((x, y), z), arrivals))| Group {
+            p: [x, y, z].map(Vec4::from_slice),
+            arrivals: arrivals.try_into().expect("four"),
+            taken: range.len().saturating_sub(4 * g),
+        })
+    }
+}
+
+/// Four sorted photons side by side: their positions one coordinate per vector.
+struct Group<'a> {
+    p: [Vec4; 3],
+    arrivals: &'a [Arrival; 4],
+    /// How many of the four lie in the range asked for (those after lie beyond it).
+    taken: usize,
+}
+
+impl Group<'_> {
+    /// The photons in the range asked for within reach of `p`, and their squared distances.
+    #[inline]
+    fn near(&self, p: Vec3, r2: f32) -> (BVec4A, Vec4) {
+        let [dx, dy, dz] = [0, 1, 2].map(|axis| self.p[axis] - p[axis]);
+        let d2 = dx * dx + dy * dy + dz * dz;
+        let in_range = Vec4::new(0.0, 1.0, 2.0, 3.0).cmplt(Vec4::splat(self.taken as f32));
+        (d2.cmplt(Vec4::splat(r2)) & in_range, d2)
     }
 
-    /// The squared distances from `p` of photons `i..i + 4`.
-    #[inline]
-    fn distances2(&self, i: usize, p: Vec3) -> Vec4 {
-        let d = |axis: usize| Vec4::from_slice(&self.p[axis][i..i + 4]) - p[axis];
-        let (dx, dy, dz) = (d(0), d(1), d(2));
-        dx * dx + dy * dy + dz * dz
+    fn at(&self, k: usize) -> Vec3 {
+        Vec3::new(self.p[0][k], self.p[1][k], self.p[2][k])
     }
 
-    /// The arrivals of photons `i..i + 4`, transposed.
+    /// The four arrivals, transposed.
     #[inline]
-    fn arrivals4(&self, i: usize) -> Arrivals4 {
-        let a = &self.arrivals[i..i + 4];
+    fn arrivals4(&self) -> Arrivals4 {
+        let a = self.arrivals;
         let first =
             Mat4::from_cols(a[0].normal_wx, a[1].normal_wx, a[2].normal_wx, a[3].normal_wx).transpose();
         let second =
@@ -306,31 +329,28 @@ impl<'a> Weigher<'a> {
 
     /// Adds the photons of `range` within reach.
     fn add_range(&mut self, photons: &Sorted, range: Range<usize>) {
-        let lanes = Vec4::new(0.0, 1.0, 2.0, 3.0);
-        for i in range.clone().step_by(4) {
-            let d2 = photons.distances2(i, self.vp.p);
-            let near =
-                d2.cmplt(Vec4::splat(self.kernel.r2)) & lanes.cmplt(Vec4::splat((range.end - i) as f32));
+        for group in photons.groups(range) {
+            let (near, d2) = group.near(self.vp.p, self.kernel.r2);
             match self.diffuse {
-                Some((cos_wo, _)) => self.add_diffuse(photons, i, d2, near, cos_wo),
-                None => for_each_lane(near, |k| self.add(photons, i + k, d2[k])),
+                Some((cos_wo, _)) => self.add_diffuse(&group, near, d2, cos_wo),
+                None => for_each_lane(near, |k| self.add(&group.arrivals[k], group.at(k), d2[k])),
             }
         }
     }
 
-    /// Adds the photons `i..i + 4` that are `near` (within reach) to a diffuse point's sums,
-    /// four lanes at once. About one candidate in three is within reach, unpredictably: a branch
-    /// per photon cost more in mispredictions than weighing every lane, with weight zero for
-    /// those not taken. Photons on surfaces meeting the point's at an edge (few) add an edge term
-    /// and cut; those facing away lie behind (the back of a thin wall); those arriving from
-    /// behind the shading normal reflect nothing toward the eye.
+    /// Adds the photons of `group` that are `near` (within reach, at squared distances `d2`) to
+    /// a diffuse point's sums, four lanes at once. About one candidate in three is within reach,
+    /// unpredictably: a branch per photon cost more in mispredictions than weighing every lane,
+    /// with weight zero for those not taken. Photons on surfaces meeting the point's at an edge
+    /// (few) add an edge term and cut; those facing away lie behind (the back of a thin wall);
+    /// those arriving from behind the shading normal reflect nothing toward the eye.
     #[inline]
-    fn add_diffuse(&mut self, photons: &Sorted, i: usize, d2: Vec4, near: BVec4A, cos_wo: f32) {
-        let arrivals = photons.arrivals4(i);
+    fn add_diffuse(&mut self, group: &Group, near: BVec4A, d2: Vec4, cos_wo: f32) {
+        let arrivals = group.arrivals4();
         let facing = dot4(&arrivals.ng, self.front);
         let edge = near & facing.cmplt(Vec4::splat(EDGE_COSINE)) & facing.cmpgt(Vec4::splat(-EDGE_COSINE));
         if edge.any() {
-            for_each_lane(edge, |k| self.add_edge(photons, i + k, d2[k]));
+            for_each_lane(edge, |k| self.add_edge(&group.arrivals[k], group.at(k), d2[k]));
         }
         let side = (dot4(&arrivals.wi, self.vp.frame.n) * cos_wo).cmpgt(Vec4::ZERO);
         let take = near & facing.cmpge(Vec4::splat(EDGE_COSINE)) & side;
@@ -340,20 +360,18 @@ impl<'a> Weigher<'a> {
         let t2 = d2 / self.kernel.r2;
         let kernel = Vec4::select(take, (1.0 - t2) * (1.0 - t2) * scale, Vec4::ZERO);
         let laplacian = Vec4::select(take, (1.0 - 2.0 * t2) * scale, Vec4::ZERO);
-        for k in 0..4 {
-            let flux = photons.arrivals[i + k].flux;
-            self.flux_kernel += flux * kernel[k];
-            self.flux_laplacian += flux * laplacian[k];
+        for (k, arrival) in group.arrivals.iter().enumerate() {
+            self.flux_kernel += arrival.flux * kernel[k];
+            self.flux_laplacian += arrival.flux * laplacian[k];
         }
     }
 
-    /// Adds photon `i`, at squared distance `d2 < r^2`, to a point of any other surface.
-    fn add(&mut self, photons: &Sorted, i: usize, d2: f32) {
-        let photon = &photons.arrivals[i];
+    /// Adds `photon`, at `at`, squared distance `d2 < r^2`, to a point of any other surface.
+    fn add(&mut self, photon: &Arrival, at: Vec3, d2: f32) {
         let facing = photon.ng().dot(self.front);
         if facing < EDGE_COSINE {
             if facing > -EDGE_COSINE {
-                self.add_edge(photons, i, d2);
+                self.add_edge(photon, at, d2);
             }
             return;
         }
@@ -364,10 +382,10 @@ impl<'a> Weigher<'a> {
         self.flux_laplacian += weighted * (1.0 - 2.0 * t2);
     }
 
-    /// Adds photon `i`, at squared distance `d2 < r^2` on a surface meeting the point's at an
-    /// edge: its edge term and the kernel mass it cuts off.
-    fn add_edge(&mut self, photons: &Sorted, i: usize, d2: f32) {
-        self.edges = self.edges + self.kernel.weigh_edge(&photons.arrivals[i], photons.at(i), d2, self.vp);
+    /// Adds `photon`, at `at`, squared distance `d2 < r^2`, on a surface meeting the point's at
+    /// an edge: its edge term and the kernel mass it cuts off.
+    fn add_edge(&mut self, photon: &Arrival, at: Vec3, d2: f32) {
+        self.edges = self.edges + self.kernel.weigh_edge(photon, at, d2, self.vp);
     }
 
     fn finish(self) -> PhotonSums {

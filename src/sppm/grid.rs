@@ -18,12 +18,16 @@ use rayon::prelude::*;
 /// Octants of a cell: `x + 2 y + 4 z`, each 0 or 1.
 const OCTANTS: usize = 8;
 
+/// Parities of a cell's coordinates (numbered as octants are).
+const PARITIES: usize = 8;
+
 /// Buckets of hashed grid cells over photons sorted by bucket and octant: octant `o` of bucket
 /// `b` holds the sorted photons `start[8 b + o]..start[8 b + o + 1]`.
 pub struct PhotonGrid {
     /// The width of an octant: the lookup radius.
     octant_size: f32,
-    buckets: usize,
+    /// Groups of buckets, one bucket per parity.
+    groups: usize,
     start: Vec<u32>,
 }
 
@@ -32,18 +36,18 @@ impl PhotonGrid {
     /// the photons in (the index in `positions` of each sorted photon). Each photon's bucket is
     /// found in parallel; the counting sort that follows is serial, in photon order.
     pub fn build(positions: &[Vec3], radius: f32) -> (Self, Vec<u32>) {
-        let buckets = (positions.len() / 2).max(1);
+        let groups = (positions.len() / 16).max(1);
         let key_of: Vec<u32> = positions
             .par_iter()
             .with_min_len(4096)
             .map(|&p| {
                 let octant = (p / radius).floor().as_ivec3();
-                let b = hash_cell(cell_of(octant), buckets);
+                let b = bucket_of(cell_of(octant), groups);
                 (b * OCTANTS + octant_number(octant & IVec3::ONE)) as u32
             })
             .collect();
-        let (start, order) = sort_into_buckets(&key_of, buckets * OCTANTS);
-        (PhotonGrid { octant_size: radius, buckets, start }, order)
+        let (start, order) = sort_into_buckets(&key_of, groups * PARITIES * OCTANTS);
+        (PhotonGrid { octant_size: radius, groups, start }, order)
     }
 
     /// Calls `visit` with ranges of sorted photons that together hold every photon within the
@@ -77,18 +81,13 @@ impl PhotonGrid {
                 within |= u64::from(mask) << (4 * y + 16 * z);
             }
         }
-        let mut cells = [(usize::MAX, 0u32); 8];
         for k in 0..8 {
             let corner = IVec3::new(k & 1, (k >> 1) & 1, (k >> 2) & 1);
-            let reached = octants_of(within >> (2 * corner.x + 8 * corner.y + 32 * corner.z));
-            let b = hash_cell(first_cell + corner, self.buckets);
-            // Two cells in one bucket share its octants: each is read once.
-            match cells[..k as usize].iter_mut().find(|(other, _)| *other == b) {
-                Some(earlier) => earlier.1 |= reached,
-                None => cells[k as usize] = (b, reached),
+            let mut reached = octants_of(within >> (2 * corner.x + 8 * corner.y + 32 * corner.z));
+            if reached == 0 {
+                continue;
             }
-        }
-        for (b, mut reached) in cells {
+            let b = bucket_of(first_cell + corner, self.groups);
             while reached != 0 {
                 let first = reached.trailing_zeros();
                 let run = (reached >> first).trailing_ones();
@@ -105,6 +104,13 @@ impl PhotonGrid {
 fn octants_of(slots: u64) -> u32 {
     let s = slots as u32;
     (s & 0x3) | ((s >> 2) & 0xC) | ((s >> 12) & 0x30) | ((s >> 14) & 0xC0)
+}
+
+/// The bucket of cell `cell`: a hashed group, and in it the bucket of the cell's parity (the
+/// evenness of its coordinates). The eight cells of any 2 x 2 x 2 block differ in parity, so a
+/// lookup never finds two of its cells in one bucket, and reads each photon once.
+fn bucket_of(cell: IVec3, groups: usize) -> usize {
+    hash_cell(cell, groups) * PARITIES + octant_number(cell & IVec3::ONE)
 }
 
 /// The cell of `2 r` that holds the octant `octant` (floor division by two).
