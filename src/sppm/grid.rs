@@ -57,21 +57,24 @@ impl PhotonGrid {
         let scaled = p / self.octant_size;
         let floor = scaled.floor();
         let own = floor.as_ivec3();
-        // The 3 x 3 x 3 octants around `p`'s own lie in two cells per axis, from `first_cell`.
-        let first_cell = cell_of(own - IVec3::ONE);
+        // The 3 x 3 x 3 octants around `p`'s own lie in two cells per axis, from `first_cell`:
+        // the cell below `p`'s own where `p`'s octant is the lower of its cell, else its own.
+        // The octant below `p`'s is the first cell's first or second (offset -2 or -1 from it).
+        // (Written so that no step overflows at the ends of the integers.)
+        let parity = own & IVec3::ONE;
+        let first_cell = cell_of(own) - IVec3::ONE + parity;
         // Per axis, the squared gap from `p` to each octant of the two cells (infinite where the
         // octant is not one of the three around `p`'s own), in octants.
         let below = scaled - floor;
         let above = Vec3::ONE - below;
+        let offsets = (parity - IVec3::splat(2)).as_vec3();
         let gaps: [Vec4; 3] = std::array::from_fn(|axis| {
-            Vec4::from_array(std::array::from_fn(|slot| {
-                match 2 * first_cell[axis] + slot as i32 - own[axis] {
-                    -1 => below[axis] * below[axis],
-                    0 => 0.0,
-                    1 => above[axis] * above[axis],
-                    _ => f32::INFINITY,
-                }
-            }))
+            let offset = Vec4::splat(offsets[axis]) + Vec4::new(0.0, 1.0, 2.0, 3.0);
+            let (below, above) =
+                (Vec4::splat(below[axis] * below[axis]), Vec4::splat(above[axis] * above[axis]));
+            let beside = Vec4::select(offset.cmpeq(Vec4::ZERO), Vec4::ZERO, Vec4::INFINITY);
+            let beside = Vec4::select(offset.cmpeq(Vec4::ONE), above, beside);
+            Vec4::select(offset.cmpeq(Vec4::NEG_ONE), below, beside)
         });
         // Bit `x + 4 y + 16 z` is set where the octant in slot (x, y, z) is within reach.
         let mut within = 0u64;
