@@ -175,8 +175,8 @@ impl PhotonSet {
         if !self.reach.is_some_and(|r| within(r, vp.p)) {
             return PhotonSums::default();
         }
-        let mut sums = Weigher::new(&self.kernel, vp);
-        self.grid.for_each_near(vp.p, |range| sums.add_range(&self.photons, range));
+        let mut sums = Weigher::new(&self.kernel, &self.photons, vp);
+        self.grid.for_each_near(vp.p, |range| sums.add_range(range));
         let mut sums = sums.finish();
         if sums.kernel != SampledSpectrum::ZERO {
             let radius = self.kernel.r2.sqrt();
@@ -223,45 +223,22 @@ impl Sorted {
         Sorted { p: [column(0), column(1), column(2)], arrivals: padded.map(Arrival::of).collect() }
     }
 
-    /// The photons of `range` in groups of four, the last padded.
-    fn groups(&self, range: Range<usize>) -> impl Iterator<Item = Group<'_>> {
+    fn at(&self, i: usize) -> Vec3 {
+        Vec3::new(self.p[0][i], self.p[1][i], self.p[2][i])
+    }
+
+    /// The positions of the photons of `range`, four at a time, one coordinate per vector (the
+    /// last four padded with the photons after the range).
+    fn positions4(&self, range: Range<usize>) -> impl Iterator<Item = [Vec4; 3]> + '_ {
         let padded = range.start..range.start + range.len().next_multiple_of(4);
         let [x, y, z] = self.p.each_ref().map(|column| column[padded.clone()].chunks_exact(4));
-        let arrivals = self.arrivals[padded.clone()].chunks_exact(4);
-        x.zip(y).zip(z).zip(arrivals).enumerate().map(move |(g, (((x, y), z), arrivals))| Group {
-            p: [x, y, z].map(Vec4::from_slice),
-            arrivals: arrivals.try_into().expect("four"),
-            taken: range.len().saturating_sub(4 * g),
-        })
+        x.zip(y).zip(z).map(|((x, y), z)| [x, y, z].map(Vec4::from_slice))
     }
-}
 
-/// Four sorted photons side by side: their positions one coordinate per vector.
-struct Group<'a> {
-    p: [Vec4; 3],
-    arrivals: &'a [Arrival; 4],
-    /// How many of the four lie in the range asked for (those after lie beyond it).
-    taken: usize,
-}
-
-impl Group<'_> {
-    /// The photons in the range asked for within reach of `p`, and their squared distances.
+    /// The arrivals of photons `indices`, transposed.
     #[inline]
-    fn near(&self, p: Vec3, r2: f32) -> (BVec4A, Vec4) {
-        let [dx, dy, dz] = [0, 1, 2].map(|axis| self.p[axis] - p[axis]);
-        let d2 = dx * dx + dy * dy + dz * dz;
-        let in_range = Vec4::new(0.0, 1.0, 2.0, 3.0).cmplt(Vec4::splat(self.taken as f32));
-        (d2.cmplt(Vec4::splat(r2)) & in_range, d2)
-    }
-
-    fn at(&self, k: usize) -> Vec3 {
-        Vec3::new(self.p[0][k], self.p[1][k], self.p[2][k])
-    }
-
-    /// The four arrivals, transposed.
-    #[inline]
-    fn arrivals4(&self) -> Arrivals4 {
-        let a = self.arrivals;
+    fn arrivals4(&self, indices: [u32; 4]) -> Arrivals4 {
+        let a = indices.map(|i| &self.arrivals[i as usize]);
         let first =
             Mat4::from_cols(a[0].normal_wx, a[1].normal_wx, a[2].normal_wx, a[3].normal_wx).transpose();
         let second =
@@ -274,6 +251,22 @@ impl Group<'_> {
         }
     }
 }
+
+/// Photons within reach of a point, listed before they are weighed: their indices and squared
+/// distances. Candidates are tested four at a time and those within reach appended without a
+/// branch per photon (about one candidate in three is within reach, unpredictably), so that
+/// weighing, the larger cost, is spent on them alone, four at a time.
+struct Near {
+    index: [u32; NEAR_CAPACITY],
+    d2: [f32; NEAR_CAPACITY],
+    len: usize,
+}
+
+/// Photons listed before they are weighed.
+const NEAR_BATCH: usize = 64;
+
+/// Room for more than a batch and one group of four candidates after it.
+const NEAR_CAPACITY: usize = NEAR_BATCH + 8;
 
 /// The dot products of `v` with four vectors given one coordinate per vector.
 #[inline]
@@ -296,6 +289,7 @@ fn for_each_lane(mask: BVec4A, mut visit: impl FnMut(usize)) {
 /// from the side it is seen from, and multiplies the sums once at the end.
 struct Weigher<'a> {
     kernel: &'a Kernel,
+    photons: &'a Sorted,
     vp: &'a VisiblePoint,
     /// The geometric normal on the side the point is seen from.
     front: Vec3,
@@ -304,74 +298,108 @@ struct Weigher<'a> {
     diffuse: Option<(f32, SampledSpectrum)>,
     /// The factor on the flux of a photon that carries its hero wavelength alone.
     hero_only_scale: f32,
+    near: Near,
     flux_kernel: SampledSpectrum,
     flux_laplacian: SampledSpectrum,
     edges: PhotonSums,
 }
 
 impl<'a> Weigher<'a> {
-    fn new(kernel: &'a Kernel, vp: &'a VisiblePoint) -> Self {
+    fn new(kernel: &'a Kernel, photons: &'a Sorted, vp: &'a VisiblePoint) -> Self {
         let diffuse = match vp.bsdf {
             Bsdf::Diffuse { albedo } => Some((vp.frame.n.dot(vp.wo), albedo * FRAC_1_PI)),
             _ => None,
         };
         Weigher {
             kernel,
+            photons,
             vp,
             front: vp.frame.ng * vp.frame.ng.dot(vp.wo).signum(),
             diffuse,
             hero_only_scale: if vp.hero_only { 1.0 / LANES as f32 } else { 1.0 },
+            near: Near { index: [0; NEAR_CAPACITY], d2: [0.0; NEAR_CAPACITY], len: 0 },
             flux_kernel: SampledSpectrum::ZERO,
             flux_laplacian: SampledSpectrum::ZERO,
             edges: PhotonSums::default(),
         }
     }
 
-    /// Adds the photons of `range` within reach.
-    fn add_range(&mut self, photons: &Sorted, range: Range<usize>) {
-        for group in photons.groups(range) {
-            let (near, d2) = group.near(self.vp.p, self.kernel.r2);
-            match self.diffuse {
-                Some((cos_wo, _)) => self.add_diffuse(&group, near, d2, cos_wo),
-                None => for_each_lane(near, |k| self.add(&group.arrivals[k], group.at(k), d2[k])),
+    /// Lists the photons of `range` within reach, weighing the list whenever it holds a batch.
+    #[inline]
+    fn add_range(&mut self, range: Range<usize>) {
+        let (p, r2) = (self.vp.p, self.kernel.r2);
+        let lanes = Vec4::new(0.0, 1.0, 2.0, 3.0);
+        for (g, [x, y, z]) in self.photons.positions4(range.clone()).enumerate() {
+            let (dx, dy, dz) = (x - p.x, y - p.y, z - p.z);
+            let d2 = dx * dx + dy * dy + dz * dz;
+            let first = range.start + 4 * g;
+            let in_range = lanes.cmplt(Vec4::splat((range.end - first) as f32));
+            let near = (d2.cmplt(Vec4::splat(r2)) & in_range).bitmask();
+            if near == 0 {
+                continue;
+            }
+            if self.near.len > NEAR_BATCH {
+                self.weigh_near();
+            }
+            let list = &mut self.near;
+            for k in 0..4 {
+                list.index[list.len] = (first + k) as u32;
+                list.d2[list.len] = d2[k];
+                list.len += (near >> k) as usize & 1;
             }
         }
     }
 
-    /// Adds the photons of `group` that are `near` (within reach, at squared distances `d2`) to
-    /// a diffuse point's sums, four lanes at once. About one candidate in three is within reach,
-    /// unpredictably: a branch per photon cost more in mispredictions than weighing every lane,
-    /// with weight zero for those not taken. Photons on surfaces meeting the point's at an edge
-    /// (few) add an edge term and cut; those facing away lie behind (the back of a thin wall);
-    /// those arriving from behind the shading normal reflect nothing toward the eye.
+    /// Weighs the listed photons and empties the list.
+    fn weigh_near(&mut self) {
+        let len = std::mem::replace(&mut self.near.len, 0);
+        let lanes = Vec4::new(0.0, 1.0, 2.0, 3.0);
+        for i in (0..len).step_by(4) {
+            let index: [u32; 4] = std::array::from_fn(|k| self.near.index[i + k]);
+            let d2 = Vec4::from_slice(&self.near.d2[i..i + 4]);
+            let listed = lanes.cmplt(Vec4::splat((len - i) as f32));
+            match self.diffuse {
+                Some((cos_wo, _)) => self.add_diffuse(index, listed, d2, cos_wo),
+                None => for_each_lane(listed, |k| self.add(index[k] as usize, d2[k])),
+            }
+        }
+    }
+
+    /// Adds the photons `index` that are `listed` (the others are stale entries), at squared
+    /// distances `d2`, to a diffuse point's sums, four lanes at once and without a branch per
+    /// photon. Photons on surfaces meeting the point's at an edge (few) add an edge term and cut;
+    /// those facing away lie behind (the back of a thin wall); those arriving from behind the
+    /// shading normal reflect nothing toward the eye.
     #[inline]
-    fn add_diffuse(&mut self, group: &Group, near: BVec4A, d2: Vec4, cos_wo: f32) {
-        let arrivals = group.arrivals4();
+    fn add_diffuse(&mut self, index: [u32; 4], listed: BVec4A, d2: Vec4, cos_wo: f32) {
+        let arrivals = self.photons.arrivals4(index);
         let facing = dot4(&arrivals.ng, self.front);
-        let edge = near & facing.cmplt(Vec4::splat(EDGE_COSINE)) & facing.cmpgt(Vec4::splat(-EDGE_COSINE));
+        let edge = listed & facing.cmplt(Vec4::splat(EDGE_COSINE)) & facing.cmpgt(Vec4::splat(-EDGE_COSINE));
         if edge.any() {
-            for_each_lane(edge, |k| self.add_edge(&group.arrivals[k], group.at(k), d2[k]));
+            for_each_lane(edge, |k| self.add_edge(index[k] as usize, d2[k]));
         }
         let side = (dot4(&arrivals.wi, self.vp.frame.n) * cos_wo).cmpgt(Vec4::ZERO);
-        let take = near & facing.cmpge(Vec4::splat(EDGE_COSINE)) & side;
+        let take = listed & facing.cmpge(Vec4::splat(EDGE_COSINE)) & side;
         // 1, or the hero-only factor (a power of two, so multiplying by it here or on the flux
         // gives the same bits).
         let scale = Vec4::ONE - arrivals.hero_only * (1.0 - self.hero_only_scale);
         let t2 = d2 / self.kernel.r2;
         let kernel = Vec4::select(take, (1.0 - t2) * (1.0 - t2) * scale, Vec4::ZERO);
         let laplacian = Vec4::select(take, (1.0 - 2.0 * t2) * scale, Vec4::ZERO);
-        for (k, arrival) in group.arrivals.iter().enumerate() {
-            self.flux_kernel += arrival.flux * kernel[k];
-            self.flux_laplacian += arrival.flux * laplacian[k];
+        for (k, &i) in index.iter().enumerate() {
+            let flux = self.photons.arrivals[i as usize].flux;
+            self.flux_kernel += flux * kernel[k];
+            self.flux_laplacian += flux * laplacian[k];
         }
     }
 
-    /// Adds `photon`, at `at`, squared distance `d2 < r^2`, to a point of any other surface.
-    fn add(&mut self, photon: &Arrival, at: Vec3, d2: f32) {
+    /// Adds photon `i`, at squared distance `d2 < r^2`, to a point of any other surface.
+    fn add(&mut self, i: usize, d2: f32) {
+        let photon = &self.photons.arrivals[i];
         let facing = photon.ng().dot(self.front);
         if facing < EDGE_COSINE {
             if facing > -EDGE_COSINE {
-                self.add_edge(photon, at, d2);
+                self.add_edge(i, d2);
             }
             return;
         }
@@ -382,13 +410,15 @@ impl<'a> Weigher<'a> {
         self.flux_laplacian += weighted * (1.0 - 2.0 * t2);
     }
 
-    /// Adds `photon`, at `at`, squared distance `d2 < r^2`, on a surface meeting the point's at
-    /// an edge: its edge term and the kernel mass it cuts off.
-    fn add_edge(&mut self, photon: &Arrival, at: Vec3, d2: f32) {
-        self.edges = self.edges + self.kernel.weigh_edge(photon, at, d2, self.vp);
+    /// Adds photon `i`, at squared distance `d2 < r^2` on a surface meeting the point's at an
+    /// edge: its edge term and the kernel mass it cuts off.
+    fn add_edge(&mut self, i: usize, d2: f32) {
+        let photon = &self.photons.arrivals[i];
+        self.edges = self.edges + self.kernel.weigh_edge(photon, self.photons.at(i), d2, self.vp);
     }
 
-    fn finish(self) -> PhotonSums {
+    fn finish(mut self) -> PhotonSums {
+        self.weigh_near();
         let bsdf = self.diffuse.map_or(SampledSpectrum::ONE, |(_, f)| f);
         PhotonSums {
             kernel: self.flux_kernel * bsdf * self.kernel.scale,
