@@ -11,7 +11,7 @@
 //! kernel mass left on the surface ([`PhotonSums`]): the ends are found from photons on surfaces
 //! meeting the point's, and from the scene's open edges ([`crate::scene::OpenEdges`]).
 
-use glam::{BVec4A, Mat4, Vec3, Vec4};
+use glam::{Vec3, Vec4};
 use rayon::prelude::*;
 use std::f32::consts::{FRAC_1_PI, PI};
 use std::ops::Range;
@@ -53,7 +53,7 @@ impl Kernel {
     /// mass the edge cuts off.
     fn weigh_edge(&self, photon: &Arrival, at: Vec3, d2: f32, vp: &VisiblePoint) -> PhotonSums {
         let laplacian = self.edge_term(photon, vp, d2 / self.r2);
-        PhotonSums { laplacian, cut: self.cut_by(photon.ng(), at, vp), ..PhotonSums::default() }
+        PhotonSums { laplacian, cut: self.cut_by(photon.ng, at, vp), ..PhotonSums::default() }
     }
 
     /// The kernel mass that the plane through `at` of normal `ng` (a photon's surface) cuts off
@@ -76,10 +76,10 @@ impl Kernel {
     /// visible point's side), as a negative bias in Laplacian units (`bias = k2 r^2 / 2 * term`).
     fn edge_term(&self, photon: &Arrival, vp: &VisiblePoint, t2: f32) -> SampledSpectrum {
         let n = vp.frame.n;
-        let wi = if photon.wi().dot(n) * vp.wo.dot(n) < 0.0 {
-            photon.wi() - 2.0 * photon.wi().dot(n) * n
+        let wi = if photon.wi.dot(n) * vp.wo.dot(n) < 0.0 {
+            photon.wi - 2.0 * photon.wi.dot(n) * n
         } else {
-            photon.wi()
+            photon.wi
         };
         let missed =
             pair_flux(photon, vp) * vp.bsdf.eval(n, vp.wo, wi) * self.scale * (1.0 - t2) * (1.0 - t2);
@@ -90,48 +90,26 @@ impl Kernel {
 /// `photon`'s flux as the path joining it to `vp` carries it: both halves scale their hero lane
 /// by the lanes' count when they drop the others, and the joined path must do so once.
 fn pair_flux(photon: &Arrival, vp: &VisiblePoint) -> SampledSpectrum {
-    if photon.hero_only() && vp.hero_only {
+    if photon.hero_only && vp.hero_only {
         photon.flux / LANES as f32
     } else {
         photon.flux
     }
 }
 
-/// What the gather reads of a photon besides its position, as three SIMD vectors: 48 bytes,
-/// where the whole photon takes 64. Four photons' second and third vectors, transposed, give
-/// their normals, directions and flags one coordinate per vector, four photons side by side.
+/// What the gather reads of a photon besides its position: 48 bytes, where the whole photon
+/// takes 64.
 #[derive(Clone, Copy)]
 struct Arrival {
     flux: SampledSpectrum,
-    /// The geometric normal's x, y, z and the direction's x.
-    normal_wx: Vec4,
-    /// The direction's y and z, 1 where the photon carries its hero wavelength alone (else 0),
-    /// and 0.
-    wyz_hero_only: Vec4,
+    ng: Vec3,
+    wi: Vec3,
+    hero_only: bool,
 }
 
 impl Arrival {
-    /// `photon`'s arrival; no flux where its flux is not finite (a photon that would spoil
-    /// every sum it enters, where it is weighed zero).
     fn of(photon: &Photon) -> Self {
-        let (ng, wi) = (photon.ng, photon.wi);
-        Arrival {
-            flux: if photon.flux.is_finite() { photon.flux } else { SampledSpectrum::ZERO },
-            normal_wx: ng.extend(wi.x),
-            wyz_hero_only: Vec4::new(wi.y, wi.z, if photon.hero_only { 1.0 } else { 0.0 }, 0.0),
-        }
-    }
-
-    fn ng(&self) -> Vec3 {
-        self.normal_wx.truncate()
-    }
-
-    fn wi(&self) -> Vec3 {
-        Vec3::new(self.normal_wx.w, self.wyz_hero_only.x, self.wyz_hero_only.y)
-    }
-
-    fn hero_only(&self) -> bool {
-        self.wyz_hero_only.z != 0.0
+        Arrival { flux: photon.flux, ng: photon.ng, wi: photon.wi, hero_only: photon.hero_only }
     }
 }
 
@@ -146,9 +124,12 @@ fn within((lo, hi): (Vec3, Vec3), p: Vec3) -> bool {
 }
 
 /// Photons bucketed for gathering at one radius (a copy, sorted by bucket, so that a gather
-/// reads each bucket's photons from consecutive memory).
+/// reads each bucket's photons from consecutive memory). Their positions are kept apart, one
+/// array per coordinate: most photons of the cells around a point are out of reach, and the
+/// distance test reads 12 bytes a photon, four photons at a time, before any photon's other 48.
 pub struct PhotonSet {
-    photons: Sorted,
+    sorted: Vec<Arrival>,
+    positions: Positions,
     grid: PhotonGrid,
     reach: Option<(Vec3, Vec3)>,
     kernel: Kernel,
@@ -161,10 +142,15 @@ impl PhotonSet {
     pub fn new(photons: &[Photon], radius: f32, open_edges: &Arc<OpenEdges>) -> Self {
         let positions: Vec<Vec3> = photons.par_iter().with_min_len(4096).map(|p| p.p).collect();
         let (grid, order) = PhotonGrid::build(&positions, radius);
+        let sorted =
+            order.par_iter().with_min_len(4096).map(|&i| Arrival::of(&photons[i as usize])).collect();
+        let reach = reach(positions.iter().copied(), radius);
+        let positions = Positions::new(order.iter().map(|&i| positions[i as usize]));
         PhotonSet {
-            photons: Sorted::new(photons, &order),
+            sorted,
+            positions,
             grid,
-            reach: reach(positions.into_iter(), radius),
+            reach,
             kernel: Kernel::new(radius),
             open_edges: Arc::clone(open_edges),
         }
@@ -175,8 +161,12 @@ impl PhotonSet {
         if !self.reach.is_some_and(|r| within(r, vp.p)) {
             return PhotonSums::default();
         }
-        let mut sums = Weigher::new(&self.kernel, &self.photons, vp);
-        self.grid.for_each_near(vp.p, |range| sums.add_range(range));
+        let mut sums = Weigher::new(&self.kernel, vp);
+        self.grid.for_each_near(vp.p, |range| {
+            self.positions.for_each_within(range, vp.p, self.kernel.r2, |i, d2| {
+                sums.add(&self.sorted[i], d2, || self.positions.at(i))
+            });
+        });
         let mut sums = sums.finish();
         if sums.kernel != SampledSpectrum::ZERO {
             let radius = self.kernel.r2.sqrt();
@@ -187,100 +177,54 @@ impl PhotonSet {
     }
 }
 
-/// The sorted photons: their positions one array per coordinate, so that four distances are
-/// tested at once, and their arrivals. Each array has three more entries than photons, far away
-/// and of no flux, for the last group of four.
-struct Sorted {
-    p: [Vec<f32>; 3],
-    arrivals: Vec<Arrival>,
+/// Photon positions, one array per coordinate, so that four distances are tested at once.
+/// Each array has three more entries than photons, far away, for the last group of four.
+struct Positions {
+    x: Vec<f32>,
+    y: Vec<f32>,
+    z: Vec<f32>,
 }
 
-/// Entries after the last photon, so that every group of four can be read whole.
-const PADDING: usize = 3;
-
-/// What fills them: a photon out of every reach, of no flux.
-const FAR: Photon = Photon {
-    p: Vec3::INFINITY,
-    wi: Vec3::ZERO,
-    ng: Vec3::ZERO,
-    flux: SampledSpectrum::ZERO,
-    hero_only: false,
-};
-
-/// Four photons' normals, directions and flags, one coordinate per vector.
-struct Arrivals4 {
-    ng: [Vec4; 3],
-    wi: [Vec4; 3],
-    hero_only: Vec4,
-}
-
-impl Sorted {
-    fn new(photons: &[Photon], order: &[u32]) -> Self {
-        let padding = [&FAR; PADDING];
-        let in_order = || order.iter().map(|&i| &photons[i as usize]).chain(padding);
-        let column = |axis: usize| in_order().map(|photon| photon.p[axis]).collect();
-        let padded = order.par_iter().map(|&i| &photons[i as usize]).chain(padding);
-        Sorted { p: [column(0), column(1), column(2)], arrivals: padded.map(Arrival::of).collect() }
+impl Positions {
+    fn new(points: impl ExactSizeIterator<Item = Vec3>) -> Self {
+        let padded = points.len() + 3;
+        let mut positions = Positions {
+            x: Vec::with_capacity(padded),
+            y: Vec::with_capacity(padded),
+            z: Vec::with_capacity(padded),
+        };
+        for p in points.chain([Vec3::INFINITY; 3]) {
+            positions.x.push(p.x);
+            positions.y.push(p.y);
+            positions.z.push(p.z);
+        }
+        positions
     }
 
     fn at(&self, i: usize) -> Vec3 {
-        Vec3::new(self.p[0][i], self.p[1][i], self.p[2][i])
+        Vec3::new(self.x[i], self.y[i], self.z[i])
     }
 
-    /// The positions of the photons of `range`, four at a time, one coordinate per vector (the
-    /// last four padded with the photons after the range).
-    fn positions4(&self, range: Range<usize>) -> impl Iterator<Item = [Vec4; 3]> + '_ {
-        let padded = range.start..range.start + range.len().next_multiple_of(4);
-        let [x, y, z] = self.p.each_ref().map(|column| column[padded.clone()].chunks_exact(4));
-        x.zip(y).zip(z).map(|((x, y), z)| [x, y, z].map(Vec4::from_slice))
-    }
-
-    /// The arrivals of photons `indices`, transposed.
+    /// Calls `visit(i, d2)` for each photon `i` in `range` at squared distance `d2 < r2` from
+    /// `p`. About one candidate in six is within reach, unpredictably: four distances are tested
+    /// at a time, without branches, and only the hits are visited.
     #[inline]
-    fn arrivals4(&self, indices: [u32; 4]) -> Arrivals4 {
-        let a = indices.map(|i| &self.arrivals[i as usize]);
-        let first =
-            Mat4::from_cols(a[0].normal_wx, a[1].normal_wx, a[2].normal_wx, a[3].normal_wx).transpose();
-        let second =
-            Mat4::from_cols(a[0].wyz_hero_only, a[1].wyz_hero_only, a[2].wyz_hero_only, a[3].wyz_hero_only)
-                .transpose();
-        Arrivals4 {
-            ng: [first.x_axis, first.y_axis, first.z_axis],
-            wi: [first.w_axis, second.x_axis, second.y_axis],
-            hero_only: second.z_axis,
+    fn for_each_within(&self, range: Range<usize>, p: Vec3, r2: f32, mut visit: impl FnMut(usize, f32)) {
+        let lane = Vec4::new(0.0, 1.0, 2.0, 3.0);
+        for i in range.clone().step_by(4) {
+            let dx = Vec4::from_slice(&self.x[i..i + 4]) - p.x;
+            let dy = Vec4::from_slice(&self.y[i..i + 4]) - p.y;
+            let dz = Vec4::from_slice(&self.z[i..i + 4]) - p.z;
+            let d2 = dx * dx + dy * dy + dz * dz;
+            let in_range = lane.cmplt(Vec4::splat((range.end - i) as f32));
+            let mut hits = (d2.cmplt(Vec4::splat(r2)) & in_range).bitmask();
+            let d2 = d2.to_array();
+            while hits != 0 {
+                let k = hits.trailing_zeros() as usize;
+                visit(i + k, d2[k]);
+                hits &= hits - 1;
+            }
         }
-    }
-}
-
-/// Photons within reach of a point, listed before they are weighed: their indices and squared
-/// distances. Candidates are tested four at a time and those within reach appended without a
-/// branch per photon (about one candidate in three is within reach, unpredictably), so that
-/// weighing, the larger cost, is spent on them alone, four at a time.
-struct Near {
-    index: [u32; NEAR_CAPACITY],
-    d2: [f32; NEAR_CAPACITY],
-    len: usize,
-}
-
-/// Photons listed before they are weighed.
-const NEAR_BATCH: usize = 64;
-
-/// Room for more than a batch and one group of four candidates after it.
-const NEAR_CAPACITY: usize = NEAR_BATCH + 8;
-
-/// The dot products of `v` with four vectors given one coordinate per vector.
-#[inline]
-fn dot4(vectors: &[Vec4; 3], v: Vec3) -> Vec4 {
-    vectors[0] * v.x + vectors[1] * v.y + vectors[2] * v.z
-}
-
-/// Calls `visit(k)` for each lane `k` set in `mask`.
-#[inline]
-fn for_each_lane(mask: BVec4A, mut visit: impl FnMut(usize)) {
-    let mut bits = mask.bitmask();
-    while bits != 0 {
-        visit(bits.trailing_zeros() as usize);
-        bits &= bits - 1;
     }
 }
 
@@ -289,7 +233,6 @@ fn for_each_lane(mask: BVec4A, mut visit: impl FnMut(usize)) {
 /// from the side it is seen from, and multiplies the sums once at the end.
 struct Weigher<'a> {
     kernel: &'a Kernel,
-    photons: &'a Sorted,
     vp: &'a VisiblePoint,
     /// The geometric normal on the side the point is seen from.
     front: Vec3,
@@ -298,127 +241,52 @@ struct Weigher<'a> {
     diffuse: Option<(f32, SampledSpectrum)>,
     /// The factor on the flux of a photon that carries its hero wavelength alone.
     hero_only_scale: f32,
-    near: Near,
     flux_kernel: SampledSpectrum,
     flux_laplacian: SampledSpectrum,
     edges: PhotonSums,
 }
 
 impl<'a> Weigher<'a> {
-    fn new(kernel: &'a Kernel, photons: &'a Sorted, vp: &'a VisiblePoint) -> Self {
+    fn new(kernel: &'a Kernel, vp: &'a VisiblePoint) -> Self {
         let diffuse = match vp.bsdf {
             Bsdf::Diffuse { albedo } => Some((vp.frame.n.dot(vp.wo), albedo * FRAC_1_PI)),
             _ => None,
         };
         Weigher {
             kernel,
-            photons,
             vp,
             front: vp.frame.ng * vp.frame.ng.dot(vp.wo).signum(),
             diffuse,
             hero_only_scale: if vp.hero_only { 1.0 / LANES as f32 } else { 1.0 },
-            near: Near { index: [0; NEAR_CAPACITY], d2: [0.0; NEAR_CAPACITY], len: 0 },
             flux_kernel: SampledSpectrum::ZERO,
             flux_laplacian: SampledSpectrum::ZERO,
             edges: PhotonSums::default(),
         }
     }
 
-    /// Lists the photons of `range` within reach, weighing the list whenever it holds a batch.
+    /// Adds `photon`, at squared distance `d2 < r^2`. Photons on surfaces meeting the point's at
+    /// an edge add an edge term and cut; those facing away lie behind (the back of a thin wall).
     #[inline]
-    fn add_range(&mut self, range: Range<usize>) {
-        let (p, r2) = (self.vp.p, self.kernel.r2);
-        let lanes = Vec4::new(0.0, 1.0, 2.0, 3.0);
-        for (g, [x, y, z]) in self.photons.positions4(range.clone()).enumerate() {
-            let (dx, dy, dz) = (x - p.x, y - p.y, z - p.z);
-            let d2 = dx * dx + dy * dy + dz * dz;
-            let first = range.start + 4 * g;
-            let in_range = lanes.cmplt(Vec4::splat((range.end - first) as f32));
-            let near = (d2.cmplt(Vec4::splat(r2)) & in_range).bitmask();
-            if near == 0 {
-                continue;
-            }
-            if self.near.len > NEAR_BATCH {
-                self.weigh_near();
-            }
-            let list = &mut self.near;
-            for k in 0..4 {
-                list.index[list.len] = (first + k) as u32;
-                list.d2[list.len] = d2[k];
-                list.len += (near >> k) as usize & 1;
-            }
-        }
-    }
-
-    /// Weighs the listed photons and empties the list.
-    fn weigh_near(&mut self) {
-        let len = std::mem::replace(&mut self.near.len, 0);
-        let lanes = Vec4::new(0.0, 1.0, 2.0, 3.0);
-        for i in (0..len).step_by(4) {
-            let index: [u32; 4] = std::array::from_fn(|k| self.near.index[i + k]);
-            let d2 = Vec4::from_slice(&self.near.d2[i..i + 4]);
-            let listed = lanes.cmplt(Vec4::splat((len - i) as f32));
-            match self.diffuse {
-                Some((cos_wo, _)) => self.add_diffuse(index, listed, d2, cos_wo),
-                None => for_each_lane(listed, |k| self.add(index[k] as usize, d2[k])),
-            }
-        }
-    }
-
-    /// Adds the photons `index` that are `listed` (the others are stale entries), at squared
-    /// distances `d2`, to a diffuse point's sums, four lanes at once and without a branch per
-    /// photon. Photons on surfaces meeting the point's at an edge (few) add an edge term and cut;
-    /// those facing away lie behind (the back of a thin wall); those arriving from behind the
-    /// shading normal reflect nothing toward the eye.
-    #[inline]
-    fn add_diffuse(&mut self, index: [u32; 4], listed: BVec4A, d2: Vec4, cos_wo: f32) {
-        let arrivals = self.photons.arrivals4(index);
-        let facing = dot4(&arrivals.ng, self.front);
-        let edge = listed & facing.cmplt(Vec4::splat(EDGE_COSINE)) & facing.cmpgt(Vec4::splat(-EDGE_COSINE));
-        if edge.any() {
-            for_each_lane(edge, |k| self.add_edge(index[k] as usize, d2[k]));
-        }
-        let side = (dot4(&arrivals.wi, self.vp.frame.n) * cos_wo).cmpgt(Vec4::ZERO);
-        let take = listed & facing.cmpge(Vec4::splat(EDGE_COSINE)) & side;
-        // 1, or the hero-only factor (a power of two, so multiplying by it here or on the flux
-        // gives the same bits).
-        let scale = Vec4::ONE - arrivals.hero_only * (1.0 - self.hero_only_scale);
-        let t2 = d2 / self.kernel.r2;
-        let kernel = Vec4::select(take, (1.0 - t2) * (1.0 - t2) * scale, Vec4::ZERO);
-        let laplacian = Vec4::select(take, (1.0 - 2.0 * t2) * scale, Vec4::ZERO);
-        for (k, &i) in index.iter().enumerate() {
-            let flux = self.photons.arrivals[i as usize].flux;
-            self.flux_kernel += flux * kernel[k];
-            self.flux_laplacian += flux * laplacian[k];
-        }
-    }
-
-    /// Adds photon `i`, at squared distance `d2 < r^2`, to a point of any other surface.
-    fn add(&mut self, i: usize, d2: f32) {
-        let photon = &self.photons.arrivals[i];
-        let facing = photon.ng().dot(self.front);
+    fn add(&mut self, photon: &Arrival, d2: f32, at: impl FnOnce() -> Vec3) {
+        let facing = photon.ng.dot(self.front);
         if facing < EDGE_COSINE {
             if facing > -EDGE_COSINE {
-                self.add_edge(i, d2);
+                self.edges = self.edges + self.kernel.weigh_edge(photon, at(), d2, self.vp);
             }
             return;
         }
-        let flux = if photon.hero_only() { photon.flux * self.hero_only_scale } else { photon.flux };
-        let weighted = flux * self.vp.bsdf.eval(self.vp.frame.n, self.vp.wo, photon.wi());
+        let flux = if photon.hero_only { photon.flux * self.hero_only_scale } else { photon.flux };
+        let weighted = match self.diffuse {
+            Some((cos_wo, _)) if photon.wi.dot(self.vp.frame.n) * cos_wo > 0.0 => flux,
+            Some(_) => return,
+            None => flux * self.vp.bsdf.eval(self.vp.frame.n, self.vp.wo, photon.wi),
+        };
         let t2 = d2 / self.kernel.r2;
         self.flux_kernel += weighted * ((1.0 - t2) * (1.0 - t2));
         self.flux_laplacian += weighted * (1.0 - 2.0 * t2);
     }
 
-    /// Adds photon `i`, at squared distance `d2 < r^2` on a surface meeting the point's at an
-    /// edge: its edge term and the kernel mass it cuts off.
-    fn add_edge(&mut self, i: usize, d2: f32) {
-        let photon = &self.photons.arrivals[i];
-        self.edges = self.edges + self.kernel.weigh_edge(photon, self.photons.at(i), d2, self.vp);
-    }
-
-    fn finish(mut self) -> PhotonSums {
-        self.weigh_near();
+    fn finish(self) -> PhotonSums {
         let bsdf = self.diffuse.map_or(SampledSpectrum::ONE, |(_, f)| f);
         PhotonSums {
             kernel: self.flux_kernel * bsdf * self.kernel.scale,
