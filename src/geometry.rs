@@ -54,8 +54,9 @@ pub fn hash_cell(cell: IVec3, buckets: usize) -> usize {
 /// `bucket_of[i]` is item `i`'s bucket among `buckets`. Gives where each bucket starts in the
 /// sorted order (`buckets + 1` entries) and the item at each sorted place.
 pub fn sort_into_buckets(bucket_of: &[u32], buckets: usize) -> (Vec<u32>, Vec<u32>) {
-    // Counted two places up, summed, then counted back up one place up while placing: each
-    // bucket's entry ends at its start (one array, no copy of it for the places).
+    // Bucket b's count goes to entry b + 2, so that the running sum leaves bucket b's start at
+    // entry b + 1: that entry is the bucket's next free place while items are placed, and ends
+    // at the bucket's end, which is bucket b + 1's start (one array, and no copy of it).
     let mut bucket_start = vec![0u32; buckets + 2];
     for &b in bucket_of {
         bucket_start[b as usize + 2] += 1;
