@@ -9,7 +9,9 @@
 //!
 //! Where the disc reaches past the end of the visible point's surface, the sum is divided by the
 //! kernel mass left on the surface ([`PhotonSums`]): the ends are found from photons on surfaces
-//! meeting the point's, and from the scene's open edges ([`crate::scene::OpenEdges`]).
+//! meeting the point's, and from the scene's open edges ([`crate::scene::OpenEdges`]). Photons
+//! across such a surface's plane from a point behind it (a thin partition's far side) are left
+//! out ([`Weigher`]).
 
 use glam::{Vec3, Vec4};
 use rayon::prelude::*;
@@ -48,27 +50,14 @@ impl Kernel {
         Kernel { r2, scale, laplacian_scale: -8.0 * scale / r2 }
     }
 
-    /// What a photon on a surface meeting the visible point's at an edge (a wall, seen from the
-    /// floor), at squared distance `d2 < r^2` from it, adds there: its edge term and the kernel
-    /// mass the edge cuts off.
-    fn weigh_edge(&self, photon: &Arrival, at: Vec3, d2: f32, vp: &VisiblePoint) -> PhotonSums {
-        let laplacian = self.edge_term(photon, vp, d2 / self.r2);
-        PhotonSums { laplacian, cut: self.cut_by(photon.ng, at, vp), ..PhotonSums::default() }
-    }
-
-    /// The kernel mass that the plane through `at` of normal `ng` (a photon's surface) cuts off
-    /// the disc around `vp` (in `vp`'s plane), filed under the axis its normal is closest to.
-    fn cut_by(&self, ng: Vec3, at: Vec3, vp: &VisiblePoint) -> Vec3 {
+    /// The wall through `at` of normal `ng` (a photon's surface, meeting the visible point's at
+    /// an edge) and the kernel mass its plane cuts off the disc around `vp` (in `vp`'s plane).
+    fn wall(&self, ng: Vec3, at: Vec3, vp: &VisiblePoint) -> Wall {
         let n = vp.frame.ng;
-        let in_plane = ng - ng.dot(n) * n;
-        let sine = in_plane.length();
-        if sine < 0.5 {
-            return Vec3::ZERO;
-        }
-        let distance = (vp.p - at).dot(ng).abs() / sine;
-        let mass = kernel_mass_beyond(distance / self.r2.sqrt());
-        let axis = ng.abs().max_position();
-        Vec3::AXES[axis] * mass
+        let sine = (ng - ng.dot(n) * n).length();
+        let height = (vp.p - at).dot(ng);
+        let mass = if sine < 0.5 { 0.0 } else { kernel_mass_beyond(height.abs() / sine / self.r2.sqrt()) };
+        Wall { at, normal: ng, point_side: height, mass }
     }
 
     /// A photon on a surface meeting the visible point's at an edge stands for the photons the
@@ -94,6 +83,27 @@ fn pair_flux(photon: &Arrival, vp: &VisiblePoint) -> SampledSpectrum {
         photon.flux / LANES as f32
     } else {
         photon.flux
+    }
+}
+
+/// The plane of a surface meeting a visible point's at an edge (a wall standing on the floor
+/// the point is on), found from a photon on it.
+#[derive(Clone, Copy, Default)]
+struct Wall {
+    /// The photon's position.
+    at: Vec3,
+    /// Its surface's normal.
+    normal: Vec3,
+    /// The visible point's height above the plane, along `normal`.
+    point_side: f32,
+    /// The kernel mass the plane cuts off the point's disc (zero: it does not reach the disc).
+    mass: f32,
+}
+
+impl Wall {
+    /// Whether `p` lies across the plane from the visible point.
+    fn separates(&self, p: Vec3) -> bool {
+        (p - self.at).dot(self.normal) * self.point_side < 0.0
     }
 }
 
@@ -158,23 +168,85 @@ impl PhotonSet {
 
     /// What the photons near `vp` add up to there, before the path throughput.
     pub fn sum_at(&self, vp: &VisiblePoint) -> PhotonSums {
+        sum_over(vp, &[(self, self.first_round(vp))])
+    }
+
+    /// The photons near `vp` weighed before any wall is known, and the walls they show.
+    pub fn first_round(&self, vp: &VisiblePoint) -> FirstRound {
+        if !self.reach.is_some_and(|r| within(r, vp.p)) {
+            return FirstRound::default();
+        }
+        let weighed = self.weigh_near(Weigher::new(&self.kernel, vp, None));
+        FirstRound { walls: weighed.walls, behind_a_wall: weighed.behind_a_wall, sums: weighed.finish() }
+    }
+
+    /// The photons near `vp` weighed with `walls` known: those across them are left out.
+    fn sum_beside(&self, vp: &VisiblePoint, walls: [Wall; 3]) -> PhotonSums {
         if !self.reach.is_some_and(|r| within(r, vp.p)) {
             return PhotonSums::default();
         }
-        let mut sums = Weigher::new(&self.kernel, vp);
-        self.grid.for_each_near(vp.p, |range| {
-            self.positions.for_each_within(range, vp.p, self.kernel.r2, |i, d2| {
-                sums.add(&self.sorted[i], d2, || self.positions.at(i))
-            });
-        });
-        let mut sums = sums.finish();
+        self.weigh_near(Weigher::new(&self.kernel, vp, Some(walls))).finish()
+    }
+
+    /// A pixel's estimate from its eye result and the photon sums at its visible point (of this
+    /// set, or of several sets of the same radius added up), cut by the scene's open edges near
+    /// the point (looked up once for the sum).
+    pub fn estimate(&self, eye: &EyeResult, mut sums: PhotonSums) -> PixelEstimate {
+        let Some(vp) = eye.point else {
+            return PixelEstimate { radiance: eye.radiance, laplacian: SampledSpectrum::ZERO };
+        };
         if sums.kernel != SampledSpectrum::ZERO {
             let radius = self.kernel.r2.sqrt();
             let edges = self.open_edges.distances(vp.p, vp.frame.ng, radius);
             sums.cut = sums.cut.max(edges.map(|d| kernel_mass_beyond(d / radius)));
         }
+        PixelEstimate {
+            radiance: eye.radiance + vp.beta * sums.kernel / sums.kernel_mass_within(),
+            laplacian: vp.beta * sums.laplacian,
+        }
+    }
+
+    /// `sums` with every photon within the radius of its visible point added.
+    fn weigh_near<'a>(&self, mut sums: Weigher<'a>) -> Weigher<'a> {
+        let p = sums.vp.p;
+        self.grid.for_each_near(p, |range| {
+            self.positions.for_each_within(range, p, self.kernel.r2, |i, d2| {
+                sums.add(&self.sorted[i], d2, || self.positions.at(i))
+            });
+        });
         sums
     }
+}
+
+/// A photon set's first round at a visible point: its sums, and the walls its photons showed.
+#[derive(Clone, Copy, Default)]
+pub struct FirstRound {
+    sums: PhotonSums,
+    walls: [Wall; 3],
+    behind_a_wall: bool,
+}
+
+/// What the photons of several sets of one radius (frames sharing photons add their own to the
+/// shared ones) add up to at `vp`, from each set's first round there. Where the point lies behind
+/// a wall that any set's photons showed, every set is weighed again with all the walls known, so
+/// that the sum is the one set of all the photons gives.
+pub fn sum_over(vp: &VisiblePoint, rounds: &[(&PhotonSet, FirstRound)]) -> PhotonSums {
+    let sums = if rounds.iter().any(|(_, first)| first.behind_a_wall) {
+        let walls = rounds.iter().fold([Wall::default(); 3], |walls, (_, first)| {
+            std::array::from_fn(|axis| {
+                let found = first.walls[axis];
+                if found.mass > walls[axis].mass {
+                    found
+                } else {
+                    walls[axis]
+                }
+            })
+        });
+        rounds.iter().map(|(set, _)| set.sum_beside(vp, walls)).reduce(|a, b| a + b)
+    } else {
+        rounds.iter().map(|(_, first)| first.sums).reduce(|a, b| a + b)
+    };
+    sums.unwrap_or_default()
 }
 
 /// Photon positions, one array per coordinate, so that four distances are tested at once.
@@ -231,6 +303,14 @@ impl Positions {
 /// Sums photons' contributions at one visible point. The kernel and its Laplacian are sums of
 /// each photon's flux times a number; for a diffuse surface the BSDF is the same for every photon
 /// from the side it is seen from, and multiplies the sums once at the end.
+///
+/// A photon on a surface meeting the point's at an edge (a wall standing on the floor the point
+/// is on) gives the wall's plane, which cuts the disc. Photons of the point's surface across that
+/// plane are not the point's: they lie on the far side of the wall (a thin partition's other
+/// side, lit while this one is dark), and the kernel mass there is cut off. Walls turn up as
+/// photons do, so where the point is seen to lie behind one (a photon on the wall's other face),
+/// the photons are weighed again with the walls known, those across them left out. Where every
+/// wall faces the point (a room's walls, from its floor) nothing of the floor lies across them.
 struct Weigher<'a> {
     kernel: &'a Kernel,
     vp: &'a VisiblePoint,
@@ -243,11 +323,20 @@ struct Weigher<'a> {
     hero_only_scale: f32,
     flux_kernel: SampledSpectrum,
     flux_laplacian: SampledSpectrum,
-    edges: PhotonSums,
+    /// The edge terms of photons on walls.
+    edge_laplacian: SampledSpectrum,
+    /// Per axis of their normals, the walls found that cut the most off the disc.
+    walls: [Wall; 3],
+    /// A wall that cuts the disc and rises above the point's surface faces away from the point:
+    /// the point lies behind it. (Below the surface, a wall facing away is the side of the block
+    /// whose top the point is on, and nothing of the top lies across it.)
+    behind_a_wall: bool,
+    /// Walls found by an earlier round: photons across them are left out.
+    known_walls: Option<[Wall; 3]>,
 }
 
 impl<'a> Weigher<'a> {
-    fn new(kernel: &'a Kernel, vp: &'a VisiblePoint) -> Self {
+    fn new(kernel: &'a Kernel, vp: &'a VisiblePoint, known_walls: Option<[Wall; 3]>) -> Self {
         let diffuse = match vp.bsdf {
             Bsdf::Diffuse { albedo } => Some((vp.frame.n.dot(vp.wo), albedo * FRAC_1_PI)),
             _ => None,
@@ -260,20 +349,30 @@ impl<'a> Weigher<'a> {
             hero_only_scale: if vp.hero_only { 1.0 / LANES as f32 } else { 1.0 },
             flux_kernel: SampledSpectrum::ZERO,
             flux_laplacian: SampledSpectrum::ZERO,
-            edges: PhotonSums::default(),
+            edge_laplacian: SampledSpectrum::ZERO,
+            walls: [Wall::default(); 3],
+            behind_a_wall: false,
+            known_walls,
         }
     }
 
     /// Adds `photon`, at squared distance `d2 < r^2`. Photons on surfaces meeting the point's at
-    /// an edge add an edge term and cut; those facing away lie behind (the back of a thin wall).
+    /// an edge add an edge term and a wall; those facing away lie behind (the back of a thin
+    /// wall), and those across a known wall lie beyond it.
     #[inline]
     fn add(&mut self, photon: &Arrival, d2: f32, at: impl FnOnce() -> Vec3) {
         let facing = photon.ng.dot(self.front);
         if facing < EDGE_COSINE {
             if facing > -EDGE_COSINE {
-                self.edges = self.edges + self.kernel.weigh_edge(photon, at(), d2, self.vp);
+                self.add_wall(photon, at(), d2);
             }
             return;
+        }
+        if let Some(walls) = &self.known_walls {
+            let p = at();
+            if walls.iter().any(|w| w.mass > 0.0 && w.separates(p)) {
+                return;
+            }
         }
         let flux = if photon.hero_only { photon.flux * self.hero_only_scale } else { photon.flux };
         let weighted = match self.diffuse {
@@ -286,24 +385,26 @@ impl<'a> Weigher<'a> {
         self.flux_laplacian += weighted * (1.0 - 2.0 * t2);
     }
 
+    /// Adds a photon at `at` on a wall: its edge term, and its wall where that cuts more off the
+    /// disc than the walls found before with normals along the same axis.
+    fn add_wall(&mut self, photon: &Arrival, at: Vec3, d2: f32) {
+        self.edge_laplacian += self.kernel.edge_term(photon, self.vp, d2 / self.kernel.r2);
+        let wall = self.kernel.wall(photon.ng, at, self.vp);
+        let rises_above_point = (at - self.vp.p).dot(self.front) > 0.0;
+        self.behind_a_wall |= wall.mass > 0.0 && wall.point_side < 0.0 && rises_above_point;
+        let axis = photon.ng.abs().max_position();
+        if wall.mass > self.walls[axis].mass {
+            self.walls[axis] = wall;
+        }
+    }
+
     fn finish(self) -> PhotonSums {
         let bsdf = self.diffuse.map_or(SampledSpectrum::ONE, |(_, f)| f);
         PhotonSums {
             kernel: self.flux_kernel * bsdf * self.kernel.scale,
-            laplacian: self.flux_laplacian * bsdf * self.kernel.laplacian_scale,
-            cut: Vec3::ZERO,
-        } + self.edges
-    }
-}
-
-/// A pixel's estimate from its eye result and the photon sums at its visible point.
-pub fn estimate(eye: &EyeResult, sums: PhotonSums) -> PixelEstimate {
-    match eye.point {
-        Some(vp) => PixelEstimate {
-            radiance: eye.radiance + vp.beta * sums.kernel / sums.kernel_mass_within(),
-            laplacian: vp.beta * sums.laplacian,
-        },
-        None => PixelEstimate { radiance: eye.radiance, laplacian: SampledSpectrum::ZERO },
+            laplacian: self.flux_laplacian * bsdf * self.kernel.laplacian_scale + self.edge_laplacian,
+            cut: Vec3::from(self.walls.map(|w| w.mass)),
+        }
     }
 }
 
@@ -311,7 +412,7 @@ pub fn estimate(eye: &EyeResult, sums: PhotonSums) -> PixelEstimate {
 pub fn gather(eye: &[EyeResult], set: &PhotonSet) -> Vec<PixelEstimate> {
     eye.par_iter()
         .with_min_len(64)
-        .map(|e| estimate(e, e.point.map_or(PhotonSums::default(), |vp| set.sum_at(&vp))))
+        .map(|e| set.estimate(e, e.point.map_or(PhotonSums::default(), |vp| set.sum_at(&vp))))
         .collect()
 }
 

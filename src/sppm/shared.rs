@@ -20,7 +20,7 @@ use std::ops::Range;
 use glam::Vec3;
 use rayon::prelude::*;
 
-use super::gather::{estimate, PhotonSet, PhotonSums};
+use super::gather::{sum_over, FirstRound, PhotonSet, PhotonSums};
 use super::photons::{continue_photon, photon_chunks, start_photon, trace_photon, Photon, PhotonState};
 use super::renderer::{collect_counting, PassSamples, PassStats, PixelEstimate, Renderer};
 use super::visible::{
@@ -126,14 +126,12 @@ pub fn run_shared_pass(
     let common = common_photons(&shared, &always_valid);
     let common_set = PhotonSet::new(&common, pass.radius, &statics.scene.open_edges);
     let eyes = share_eyes.then(|| trace_shared_eyes(statics, pass, swept));
-    let common_sums: Vec<PhotonSums> = match &eyes {
+    let common_first_round =
+        |eye: &EyeResult| eye.point.map_or(FirstRound::default(), |vp| common_set.first_round(&vp));
+    let common_rounds: Vec<FirstRound> = match &eyes {
         Some((records, eye_stats)) => {
             stats = stats + *eye_stats;
-            records
-                .par_iter()
-                .with_min_len(64)
-                .map(|r| r.end.result.point.map_or(PhotonSums::default(), |vp| common_set.sum_at(&vp)))
-                .collect()
+            records.par_iter().with_min_len(64).map(|r| common_first_round(&r.end.result)).collect()
         }
         None => Vec::new(),
     };
@@ -142,20 +140,24 @@ pub fn run_shared_pass(
         let own_set = PhotonSet::new(&own, pass.radius, &frame.scene.open_edges);
         let pixels = (frame.settings.width * frame.settings.height) as usize;
         let (estimates, eye_stats) = collect_counting(pixels, |pixel| {
-            let (eye, common_sum, eye_stats) = match &eyes {
+            let (eye, common_round, eye_stats) = match &eyes {
                 Some((records, _)) => match frame_eye(frame, pass, &records[pixel]) {
-                    (eye, false, s) => (eye, common_sums[pixel], s),
+                    (eye, false, s) => (eye, common_rounds[pixel], s),
                     (eye, true, s) => {
-                        (eye, eye.point.map_or(PhotonSums::default(), |vp| common_set.sum_at(&vp)), s)
+                        let round = common_first_round(&eye);
+                        (eye, round, s)
                     }
                 },
                 None => {
                     let (eye, s) = trace_eye_path(frame, pass, pixel);
-                    (eye, eye.point.map_or(PhotonSums::default(), |vp| common_set.sum_at(&vp)), s)
+                    let round = common_first_round(&eye);
+                    (eye, round, s)
                 }
             };
-            let own_sum = eye.point.map_or(PhotonSums::default(), |vp| own_set.sum_at(&vp));
-            (estimate(&eye, common_sum + own_sum), eye_stats)
+            let sums = eye.point.map_or(PhotonSums::default(), |vp| {
+                sum_over(&vp, &[(&common_set, common_round), (&own_set, own_set.first_round(&vp))])
+            });
+            (own_set.estimate(&eye, sums), eye_stats)
         });
         let frame_stats = *photon_stats + eye_stats;
         consume(SharedPassOutput { frame: index, estimates, stats: frame_stats });
