@@ -4,9 +4,11 @@
 //!
 //! An edge is open when one triangle alone has it, after welding corners at equal positions
 //! across every mesh (exporters split vertices at seams and sharp edges; two meshes that share a
-//! border share its corners). Only the triangles that stay still over the frames are searched.
+//! border share its corners). The still triangles' open edges are found and bucketed once; the
+//! moving triangles' open sides are found once, and their edges bucketed again in each pose.
 
 use std::collections::HashMap;
+use std::sync::Arc;
 
 use glam::{IVec3, Vec3};
 
@@ -24,9 +26,23 @@ struct OpenEdge {
     outward: Vec3,
 }
 
-/// The open edges of a geometry, bucketed by grid cells for lookups near a point.
+/// The open edges of a scene at one time: those of the triangles that stay still, found and
+/// bucketed once, and those of the moving triangles as posed.
 #[derive(Debug, Default)]
 pub struct OpenEdges {
+    still: Arc<EdgeGrid>,
+    moving: EdgeGrid,
+    cell_size: f32,
+}
+
+/// Which sides of a geometry's triangles are open, as (triangle, side) pairs: found once, and
+/// the same sides in any pose of those triangles.
+#[derive(Debug, Default)]
+pub struct OpenSides(Vec<(usize, usize)>);
+
+/// Open edges bucketed by grid cells for lookups near a point.
+#[derive(Debug, Default)]
+struct EdgeGrid {
     edges: Vec<OpenEdge>,
     cell_size: f32,
     /// Bucket `k` lists the edges `entries[bucket_start[k]..bucket_start[k + 1]]`.
@@ -46,13 +62,86 @@ const SAME_SURFACE_COSINE: f32 = 0.9;
 const PLANE_TOLERANCE: f32 = 0.25;
 
 impl OpenEdges {
-    /// The open edges of `geometry`, bucketed for lookups of radius about `cell_size`.
+    /// The open edges of `geometry` (the still triangles), bucketed for lookups of radius about
+    /// `cell_size`.
     pub fn of(geometry: &Geometry, cell_size: f32) -> Self {
-        let edges = open_edges(geometry);
-        if edges.len() > MOST_OPEN_EDGES {
-            return OpenEdges::default();
-        }
         let cell_size = cell_size.max(f32::MIN_POSITIVE);
+        let edges = OpenSides::of(geometry).edges(geometry);
+        OpenEdges { still: Arc::new(EdgeGrid::new(edges, cell_size)), moving: EdgeGrid::default(), cell_size }
+    }
+
+    /// These edges and those of `moving` (posed triangles whose open sides are `sides`).
+    pub fn with_moving(&self, moving: &Geometry, sides: &OpenSides) -> Self {
+        OpenEdges {
+            still: Arc::clone(&self.still),
+            moving: EdgeGrid::new(sides.edges(moving), self.cell_size),
+            cell_size: self.cell_size,
+        }
+    }
+
+    /// How many edges are open.
+    pub fn len(&self) -> usize {
+        self.still.edges.len() + self.moving.edges.len()
+    }
+
+    /// Whether no edge is open.
+    pub fn is_empty(&self) -> bool {
+        self.len() == 0
+    }
+
+    /// For a point `p` on a surface of normal `n`: the distance within the surface to its nearest
+    /// open edge closer than `reach`, per axis of the direction across the edge (infinite where
+    /// there is none), so that two edges meeting at a corner both count.
+    pub fn distances(&self, p: Vec3, n: Vec3, reach: f32) -> Vec3 {
+        self.still.distances(p, n, reach).min(self.moving.distances(p, n, reach))
+    }
+}
+
+impl OpenSides {
+    /// Every triangle side of `geometry` that no other triangle shares (corners welded by
+    /// position); none when there are more than [`MOST_OPEN_EDGES`].
+    pub fn of(geometry: &Geometry) -> Self {
+        let mut welded: HashMap<[u32; 3], u32> = HashMap::new();
+        let ids: Vec<u32> = geometry
+            .positions
+            .iter()
+            .map(|p| {
+                let next = welded.len() as u32;
+                // + 0.0 makes -0.0 the same key as 0.0.
+                *welded.entry(p.to_array().map(|c| (c + 0.0).to_bits())).or_insert(next)
+            })
+            .collect();
+        let mut sides: HashMap<(u32, u32), (u32, usize, usize)> = HashMap::new();
+        for (t, triangle) in geometry.triangles.iter().enumerate() {
+            for k in 0..3 {
+                let (i, j) = (triangle.vertices[k], triangle.vertices[(k + 1) % 3]);
+                let key = (ids[i as usize].min(ids[j as usize]), ids[i as usize].max(ids[j as usize]));
+                sides.entry(key).and_modify(|(count, _, _)| *count += 1).or_insert((1, t, k));
+            }
+        }
+        let mut open: Vec<(usize, usize)> =
+            sides.into_values().filter(|&(count, _, _)| count == 1).map(|(_, t, k)| (t, k)).collect();
+        if open.len() > MOST_OPEN_EDGES {
+            return OpenSides::default();
+        }
+        open.sort_unstable();
+        OpenSides(open)
+    }
+
+    /// Whether no side is open.
+    pub fn is_empty(&self) -> bool {
+        self.0.is_empty()
+    }
+
+    /// The open edges these sides are in `geometry` (a pose of the triangles they were found in).
+    fn edges(&self, geometry: &Geometry) -> Vec<OpenEdge> {
+        self.0.iter().filter_map(|&(t, k)| open_edge(geometry, t, k)).collect()
+    }
+}
+
+impl EdgeGrid {
+    /// `edges` bucketed by cells of `cell_size`.
+    fn new(edges: Vec<OpenEdge>, cell_size: f32) -> Self {
         let mut pairs: Vec<(IVec3, u32)> = Vec::new();
         for (i, edge) in edges.iter().enumerate() {
             pairs.extend(cells_near_segment(edge.a, edge.b, cell_size).into_iter().map(|c| (c, i as u32)));
@@ -61,23 +150,11 @@ impl OpenEdges {
         let bucket_of: Vec<u32> = pairs.iter().map(|&(c, _)| hash_cell(c, buckets) as u32).collect();
         let (bucket_start, order) = sort_into_buckets(&bucket_of, buckets);
         let entries = order.iter().map(|&i| pairs[i as usize].1).collect();
-        OpenEdges { edges, cell_size, bucket_start, entries }
+        EdgeGrid { edges, cell_size, bucket_start, entries }
     }
 
-    /// How many edges are open.
-    pub fn len(&self) -> usize {
-        self.edges.len()
-    }
-
-    /// Whether no edge is open.
-    pub fn is_empty(&self) -> bool {
-        self.edges.is_empty()
-    }
-
-    /// For a point `p` on a surface of normal `n`: the distance within the surface to its nearest
-    /// open edge closer than `reach`, per axis of the direction across the edge (infinite where
-    /// there is none), so that two edges meeting at a corner both count.
-    pub fn distances(&self, p: Vec3, n: Vec3, reach: f32) -> Vec3 {
+    /// [`OpenEdges::distances`] over these edges.
+    fn distances(&self, p: Vec3, n: Vec3, reach: f32) -> Vec3 {
         let mut nearest = Vec3::INFINITY;
         if self.edges.is_empty() {
             return nearest;
@@ -126,32 +203,6 @@ impl OpenEdge {
         let d = q.distance(self.a + t * along);
         (d < reach).then_some(d)
     }
-}
-
-/// Every triangle side of `geometry` that no other triangle shares (corners welded by position).
-fn open_edges(geometry: &Geometry) -> Vec<OpenEdge> {
-    let mut welded: HashMap<[u32; 3], u32> = HashMap::new();
-    let ids: Vec<u32> = geometry
-        .positions
-        .iter()
-        .map(|p| {
-            let next = welded.len() as u32;
-            // + 0.0 makes -0.0 the same key as 0.0.
-            *welded.entry(p.to_array().map(|c| (c + 0.0).to_bits())).or_insert(next)
-        })
-        .collect();
-    let mut sides: HashMap<(u32, u32), (u32, usize, usize)> = HashMap::new();
-    for (t, triangle) in geometry.triangles.iter().enumerate() {
-        for k in 0..3 {
-            let (i, j) = (triangle.vertices[k], triangle.vertices[(k + 1) % 3]);
-            let key = (ids[i as usize].min(ids[j as usize]), ids[i as usize].max(ids[j as usize]));
-            sides.entry(key).and_modify(|(count, _, _)| *count += 1).or_insert((1, t, k));
-        }
-    }
-    let mut open: Vec<(usize, usize)> =
-        sides.into_values().filter(|&(count, _, _)| count == 1).map(|(_, t, k)| (t, k)).collect();
-    open.sort_unstable();
-    open.into_iter().filter_map(|(t, k)| open_edge(geometry, t, k)).collect()
 }
 
 /// Side `k` (corners `k` and `k + 1`) of triangle `t`, or `None` for a degenerate triangle.

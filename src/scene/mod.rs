@@ -28,7 +28,7 @@ use crate::materials::{Material, ShadingFrame};
 use crate::spectrum::{SampledSpectrum, Wavelengths};
 
 pub use description::Description;
-pub use edges::OpenEdges;
+pub use edges::{OpenEdges, OpenSides};
 pub use pose::{Prepared, TimeRange};
 
 /// A scene that cannot be loaded: the file and what is wrong with it.

@@ -10,7 +10,7 @@ use std::sync::Arc;
 use glam::{Mat3, Mat4, Vec3};
 
 use super::description::{Description, Lens, LensSettings, MeshInstance, PunctualKind, PunctualLight};
-use super::{bounding_sphere, Geometry, OpenEdges, Scene, DEFAULT_RADIUS_FRACTION, NOT_A_LIGHT};
+use super::{bounding_sphere, Geometry, OpenEdges, OpenSides, Scene, DEFAULT_RADIUS_FRACTION, NOT_A_LIGHT};
 use crate::accel::Bvh;
 use crate::camera::Camera;
 use crate::lights::{BoundingSphere, EmittingTriangle, Light};
@@ -43,6 +43,8 @@ pub struct Prepared {
     fixed_lights: Vec<Light>,
     fixed_triangle_lights: Arc<Vec<u32>>,
     open_edges: Arc<OpenEdges>,
+    /// The moving triangles' open sides, found in their pose at the range's start.
+    moving_open_sides: OpenSides,
     moving_meshes: Vec<usize>,
     moving_lights: Vec<usize>,
     camera_moves: bool,
@@ -63,6 +65,16 @@ fn flatten(mesh: &MeshInstance, world: Mat4, out: &mut Geometry) {
         let [a, b, c] = t.vertices.map(|v| base + v);
         super::TriangleRef { vertices: if mirrored { [a, c, b] } else { [a, b, c] }, material: t.material }
     }));
+}
+
+/// `meshes` of `description` flattened in their pose at `time`.
+fn flatten_at(description: &Description, meshes: &[usize], time: f32) -> Geometry {
+    let mut out = Geometry::default();
+    for &m in meshes {
+        let mesh = &description.meshes[m];
+        flatten(mesh, description.rig.world(mesh.node, time), &mut out);
+    }
+    out
 }
 
 /// The triangle lights of `geometry` (numbered from `first_light`), and each triangle's light.
@@ -146,11 +158,7 @@ impl Prepared {
             (0..description.meshes.len()).partition(|&m| moves(description.meshes[m].node));
         let (moving_lights, fixed_punctual): (Vec<usize>, Vec<usize>) =
             (0..description.lights.len()).partition(|&l| moves(description.lights[l].node));
-        let mut fixed = Geometry::default();
-        for &m in &fixed_meshes {
-            let mesh = &description.meshes[m];
-            flatten(mesh, rig.world(mesh.node, range.start), &mut fixed);
-        }
+        let fixed = flatten_at(&description, &fixed_meshes, range.start);
         let mut fixed_lights: Vec<Light> = fixed_punctual
             .iter()
             .map(|&l| punctual(&description.lights[l], rig.world(description.lights[l].node, range.start)))
@@ -164,6 +172,7 @@ impl Prepared {
             moving_meshes.iter().filter_map(|&m| swept_bounds(&description, &description.meshes[m], range));
         let sphere = bounding_sphere(fixed.bounds().into_iter().chain(swept));
         let open_edges = Arc::new(OpenEdges::of(&fixed, sphere.radius * DEFAULT_RADIUS_FRACTION as f32));
+        let moving_open_sides = OpenSides::of(&flatten_at(&description, &moving_meshes, range.start));
         Prepared {
             camera_moves: moves(description.camera.node),
             materials: Arc::new(description.materials.clone()),
@@ -173,6 +182,7 @@ impl Prepared {
             fixed_lights,
             fixed_triangle_lights: Arc::new(fixed_triangle_lights),
             open_edges,
+            moving_open_sides,
             moving_meshes,
             moving_lights,
             lens,
@@ -218,10 +228,12 @@ impl Prepared {
     /// The scene at `time` seconds (within the range).
     pub fn pose(&self, time: f32) -> Scene {
         let d = &self.description;
-        let mut moving = Geometry::default();
-        for &m in &self.moving_meshes {
-            flatten(&d.meshes[m], d.rig.world(d.meshes[m].node, time), &mut moving);
-        }
+        let moving = flatten_at(d, &self.moving_meshes, time);
+        let open_edges = if self.moving_open_sides.is_empty() {
+            Arc::clone(&self.open_edges)
+        } else {
+            Arc::new(self.open_edges.with_moving(&moving, &self.moving_open_sides))
+        };
         let mut lights = self.fixed_lights.clone();
         let first_moving_light = lights.len();
         lights.extend(
@@ -254,7 +266,7 @@ impl Prepared {
             lights,
             fixed_triangle_lights: Arc::clone(&self.fixed_triangle_lights),
             moving_triangle_lights,
-            open_edges: Arc::clone(&self.open_edges),
+            open_edges,
             distant_lights,
             moving_lights,
             camera: Camera::from_node(camera_world, d.camera.yfov).with_lens(self.lens),
