@@ -32,7 +32,6 @@ struct OpenEdge {
 pub struct OpenEdges {
     still: Arc<EdgeGrid>,
     moving: EdgeGrid,
-    cell_size: f32,
 }
 
 /// Which sides of a geometry's triangles are open, as (triangle, side) pairs: found once, and
@@ -67,15 +66,14 @@ impl OpenEdges {
     pub fn of(geometry: &Geometry, cell_size: f32) -> Self {
         let cell_size = cell_size.max(f32::MIN_POSITIVE);
         let edges = OpenSides::of(geometry).edges(geometry);
-        OpenEdges { still: Arc::new(EdgeGrid::new(edges, cell_size)), moving: EdgeGrid::default(), cell_size }
+        OpenEdges { still: Arc::new(EdgeGrid::new(edges, cell_size)), moving: EdgeGrid::default() }
     }
 
     /// These edges and those of `moving` (posed triangles whose open sides are `sides`).
     pub fn with_moving(&self, moving: &Geometry, sides: &OpenSides) -> Self {
         OpenEdges {
             still: Arc::clone(&self.still),
-            moving: EdgeGrid::new(sides.edges(moving), self.cell_size),
-            cell_size: self.cell_size,
+            moving: EdgeGrid::new(sides.edges(moving), self.still.cell_size),
         }
     }
 

@@ -101,6 +101,15 @@ struct Wall {
 }
 
 impl Wall {
+    /// This wall, or `other` where it cuts more off the disc.
+    fn or_if_cutting_more(self, other: Wall) -> Wall {
+        if other.mass > self.mass {
+            other
+        } else {
+            self
+        }
+    }
+
     /// Whether `p` lies across the plane from the visible point.
     fn separates(&self, p: Vec3) -> bool {
         (p - self.at).dot(self.normal) * self.point_side < 0.0
@@ -171,9 +180,14 @@ impl PhotonSet {
         sum_over(vp, &[(self, self.first_round(vp))])
     }
 
+    /// Whether `p` lies in the box the photons reach (their box grown by the radius).
+    fn reaches(&self, p: Vec3) -> bool {
+        self.reach.is_some_and(|r| within(r, p))
+    }
+
     /// The photons near `vp` weighed before any wall is known, and the walls they show.
     pub fn first_round(&self, vp: &VisiblePoint) -> FirstRound {
-        if !self.reach.is_some_and(|r| within(r, vp.p)) {
+        if !self.reaches(vp.p) {
             return FirstRound::default();
         }
         let weighed = self.weigh_near(Weigher::new(&self.kernel, vp, None));
@@ -182,7 +196,7 @@ impl PhotonSet {
 
     /// The photons near `vp` weighed with `walls` known: those across them are left out.
     fn sum_beside(&self, vp: &VisiblePoint, walls: [Wall; 3]) -> PhotonSums {
-        if !self.reach.is_some_and(|r| within(r, vp.p)) {
+        if !self.reaches(vp.p) {
             return PhotonSums::default();
         }
         self.weigh_near(Weigher::new(&self.kernel, vp, Some(walls))).finish()
@@ -233,14 +247,7 @@ pub struct FirstRound {
 pub fn sum_over(vp: &VisiblePoint, rounds: &[(&PhotonSet, FirstRound)]) -> PhotonSums {
     let sums = if rounds.iter().any(|(_, first)| first.behind_a_wall) {
         let walls = rounds.iter().fold([Wall::default(); 3], |walls, (_, first)| {
-            std::array::from_fn(|axis| {
-                let found = first.walls[axis];
-                if found.mass > walls[axis].mass {
-                    found
-                } else {
-                    walls[axis]
-                }
-            })
+            std::array::from_fn(|axis| walls[axis].or_if_cutting_more(first.walls[axis]))
         });
         rounds.iter().map(|(set, _)| set.sum_beside(vp, walls)).reduce(|a, b| a + b)
     } else {
@@ -393,9 +400,7 @@ impl<'a> Weigher<'a> {
         let rises_above_point = (at - self.vp.p).dot(self.front) > 0.0;
         self.behind_a_wall |= wall.mass > 0.0 && wall.point_side < 0.0 && rises_above_point;
         let axis = photon.ng.abs().max_position();
-        if wall.mass > self.walls[axis].mass {
-            self.walls[axis] = wall;
-        }
+        self.walls[axis] = self.walls[axis].or_if_cutting_more(wall);
     }
 
     fn finish(self) -> PhotonSums {
