@@ -16,11 +16,12 @@
 //!   `K(t) = 3 / (pi r^2) (1 - t^2)^2` the per-axis second moment is `k2 r^2` with `k2 = 1/8`
 //!   (`E[rho^2] = r^2 / 4` over the disc). Radii shrink from pass to pass, so the film sums
 //!   `r_i^2 Laplacian_i` and the bias of the mean is `1/2 k2 sum(r_i^2 Laplacian_i) / N`.
-//!   Where the gather disc crosses an edge of its surface, the photons beyond the edge are missed:
-//!   a bias of the order of the radiance itself, which the Laplacian does not see (at the edge the
-//!   biweight's gradient is zero across it). The photons within reach on a surface meeting the
-//!   visible point's at an edge stand for them, and the gather adds what they would have added
-//!   (negated, in the same units) to the Laplacian sum (`gather.rs`, `edge_term`).
+//!   Where the gather disc crosses an edge of its surface, the gather divides by the kernel mass
+//!   left on the surface (`gather.rs`), so the photons missed beyond the edge bias nothing to first
+//!   order and add no term. (An edge term, from photons on walls standing for those beyond, was
+//!   added before that renormalisation; after it, the term drew every edge bright in the bound
+//!   where the true error shows none: without it the caustic box's mean relative bound at 64
+//!   passes is 13% lower, 0.079 against 0.091, with 95.5% of pixels covered against 95.7%.)
 //!
 //! The Laplacian estimate is noisy (its kernel varies like 1/r^4); as the paper advises it is
 //! smoothed: here by a 3 x 3 box filter over neighbouring pixels' sums before it is used.

@@ -23,7 +23,6 @@ use super::grid::PhotonGrid;
 use super::photons::Photon;
 use super::renderer::{PixelEstimate, VisiblePoint};
 use super::visible::EyeResult;
-use crate::error::K2;
 use crate::materials::Bsdf;
 use crate::scene::OpenEdges;
 use crate::spectrum::{SampledSpectrum, LANES};
@@ -58,31 +57,6 @@ impl Kernel {
         let height = (vp.p - at).dot(ng);
         let mass = if sine < 0.5 { 0.0 } else { kernel_mass_beyond(height.abs() / sine / self.r2.sqrt()) };
         Wall { at, normal: ng, point_side: height, mass }
-    }
-
-    /// A photon on a surface meeting the visible point's at an edge stands for the photons the
-    /// disc misses beyond that edge: what it would add there (its direction mirrored to the
-    /// visible point's side), as a negative bias in Laplacian units (`bias = k2 r^2 / 2 * term`).
-    fn edge_term(&self, photon: &Arrival, vp: &VisiblePoint, t2: f32) -> SampledSpectrum {
-        let n = vp.frame.n;
-        let wi = if photon.wi.dot(n) * vp.wo.dot(n) < 0.0 {
-            photon.wi - 2.0 * photon.wi.dot(n) * n
-        } else {
-            photon.wi
-        };
-        let missed =
-            pair_flux(photon, vp) * vp.bsdf.eval(n, vp.wo, wi) * self.scale * (1.0 - t2) * (1.0 - t2);
-        -missed / (0.5 * K2 as f32 * self.r2)
-    }
-}
-
-/// `photon`'s flux as the path joining it to `vp` carries it: both halves scale their hero lane
-/// by the lanes' count when they drop the others, and the joined path must do so once.
-fn pair_flux(photon: &Arrival, vp: &VisiblePoint) -> SampledSpectrum {
-    if photon.hero_only && vp.hero_only {
-        photon.flux / LANES as f32
-    } else {
-        photon.flux
     }
 }
 
@@ -330,8 +304,6 @@ struct Weigher<'a> {
     hero_only_scale: f32,
     flux_kernel: SampledSpectrum,
     flux_laplacian: SampledSpectrum,
-    /// The edge terms of photons on walls.
-    edge_laplacian: SampledSpectrum,
     /// Per axis of their normals, the walls found that cut the most off the disc.
     walls: [Wall; 3],
     /// A wall that cuts the disc and rises above the point's surface faces away from the point:
@@ -356,7 +328,6 @@ impl<'a> Weigher<'a> {
             hero_only_scale: if vp.hero_only { 1.0 / LANES as f32 } else { 1.0 },
             flux_kernel: SampledSpectrum::ZERO,
             flux_laplacian: SampledSpectrum::ZERO,
-            edge_laplacian: SampledSpectrum::ZERO,
             walls: [Wall::default(); 3],
             behind_a_wall: false,
             known_walls,
@@ -364,14 +335,14 @@ impl<'a> Weigher<'a> {
     }
 
     /// Adds `photon`, at squared distance `d2 < r^2`. Photons on surfaces meeting the point's at
-    /// an edge add an edge term and a wall; those facing away lie behind (the back of a thin
-    /// wall), and those across a known wall lie beyond it.
+    /// an edge add a wall; those facing away lie behind (the back of a thin wall), and those
+    /// across a known wall lie beyond it.
     #[inline]
     fn add(&mut self, photon: &Arrival, d2: f32, at: impl FnOnce() -> Vec3) {
         let facing = photon.ng.dot(self.front);
         if facing < EDGE_COSINE {
             if facing > -EDGE_COSINE {
-                self.add_wall(photon, at(), d2);
+                self.add_wall(photon, at());
             }
             return;
         }
@@ -392,10 +363,9 @@ impl<'a> Weigher<'a> {
         self.flux_laplacian += weighted * (1.0 - 2.0 * t2);
     }
 
-    /// Adds a photon at `at` on a wall: its edge term, and its wall where that cuts more off the
-    /// disc than the walls found before with normals along the same axis.
-    fn add_wall(&mut self, photon: &Arrival, at: Vec3, d2: f32) {
-        self.edge_laplacian += self.kernel.edge_term(photon, self.vp, d2 / self.kernel.r2);
+    /// Adds a photon at `at` on a wall: its wall, where that cuts more off the disc than the walls
+    /// found before with normals along the same axis.
+    fn add_wall(&mut self, photon: &Arrival, at: Vec3) {
         let wall = self.kernel.wall(photon.ng, at, self.vp);
         let rises_above_point = (at - self.vp.p).dot(self.front) > 0.0;
         self.behind_a_wall |= wall.mass > 0.0 && wall.point_side < 0.0 && rises_above_point;
@@ -407,7 +377,7 @@ impl<'a> Weigher<'a> {
         let bsdf = self.diffuse.map_or(SampledSpectrum::ONE, |(_, f)| f);
         PhotonSums {
             kernel: self.flux_kernel * bsdf * self.kernel.scale,
-            laplacian: self.flux_laplacian * bsdf * self.kernel.laplacian_scale + self.edge_laplacian,
+            laplacian: self.flux_laplacian * bsdf * self.kernel.laplacian_scale,
             cut: Vec3::from(self.walls.map(|w| w.mass)),
         }
     }
@@ -436,7 +406,7 @@ pub fn gather(eye: &[EyeResult], set: &PhotonSet) -> Vec<PixelEstimate> {
 pub struct PhotonSums {
     /// Kernel-weighted reflected flux.
     kernel: SampledSpectrum,
-    /// The same with the kernel's Laplacian, and the edge terms.
+    /// The same with the kernel's Laplacian.
     laplacian: SampledSpectrum,
     /// Kernel mass cut off by edges, per axis of the direction across the edge.
     cut: Vec3,
