@@ -120,7 +120,7 @@ pub struct Scene {
     pub fixed_triangle_lights: Arc<Vec<u32>>,
     /// The same for each moving triangle.
     pub moving_triangle_lights: Vec<u32>,
-    /// The open edges of the fixed triangles (where surfaces end in the open).
+    /// The open edges of the triangles in this pose (where surfaces end in the open).
     pub open_edges: Arc<OpenEdges>,
     /// Indices in `lights` of the distant lights a ray leaving the scene can see.
     pub distant_lights: Vec<usize>,
