@@ -140,7 +140,9 @@ def quad(centre, u, v, half_u, half_v):
     return [[c[0], c[1], c[2]], [c[0], c[2], c[3]]]
 
 
-WHITE = {"name": "Screen", "pbrMetallicRoughness": {"baseColorFactor": [1, 1, 1, 1], "metallicFactor": 0, "roughnessFactor": 1}}
+# A Lambertian screen: no specular layer (KHR_materials_specular with a factor of 0).
+WHITE = {"name": "Screen", "pbrMetallicRoughness": {"baseColorFactor": [1, 1, 1, 1], "metallicFactor": 0, "roughnessFactor": 1},
+         "extensions": {"KHR_materials_specular": {"specularFactor": 0}}}
 
 
 def glass_material(gltf, name, extras=None, ior=None):
@@ -203,6 +205,7 @@ def prism_scene(name, glass_extras, ior):
     screen = quad(centre, [0, 0, 1], across, 1.5, 1.5)
     if face_normal(screen[0])[0] * exit_dir[0] + face_normal(screen[0])[1] * exit_dir[1] > 0:
         screen = [[t[0], t[2], t[1]] for t in screen]
+    gltf.extension("KHR_materials_specular")
     gltf.mesh("Screen", screen, gltf.material(WHITE))
     # The camera's up is the prism's axis, so the spectrum spreads across the image.
     camera(gltf, [centre[k] - 2.5 * exit_dir[k] for k in range(3)], exit_dir, 0.2, up=(0.0, 0.0, 1.0), aspect=2.0)
@@ -247,6 +250,7 @@ def rainbow_scene():
     screen = []
     for cx, cy, hx, hy in [(0, 14.25, 30, 12.75), (0, -14.25, 30, 12.75), (-16.5, 0, 13.5, 1.5), (16.5, 0, 13.5, 1.5)]:
         screen += quad([cx, cy, SCREEN_Z], [0, 1, 0], [1, 0, 0], hy, hx)
+    gltf.extension("KHR_materials_specular")
     gltf.mesh("Screen", screen, gltf.material(WHITE))
     # The camera looks at where the bow crosses the screen's +x axis, close enough to resolve
     # 0.1 degree of bow angle per pixel.

@@ -126,7 +126,8 @@ fn base_colour_textures_colour_the_ground() {
     let mut gltf = GltfBuilder::default();
     let texture = gltf.texture("checker.png");
     let material = gltf.material(json!({"pbrMetallicRoughness": {"baseColorTexture": {"index": texture},
-        "baseColorFactor": [1.0, 1.0, 1.0, 1.0], "metallicFactor": 0.0}}));
+        "baseColorFactor": [1.0, 1.0, 1.0, 1.0], "metallicFactor": 0.0},
+        "extensions": {"KHR_materials_specular": {"specularFactor": 0.0}}}));
     // The ground spans x in [-1, 1]: u = (x + 1) / 2, so the red texels are at x < 0.
     let (a, b, c, d) = ([-1.0, 0.0, -1.0], [-1.0, 0.0, 1.0], [1.0, 0.0, 1.0], [1.0, 0.0, -1.0]);
     let uv = |p: [f32; 3]| [(p[0] + 1.0) / 2.0, (p[2] + 1.0) / 2.0];

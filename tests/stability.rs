@@ -62,6 +62,7 @@ fn furnace(half: f32, centre: [f32; 3], contents: impl FnOnce(&mut GltfBuilder))
     let mut gltf = GltfBuilder::default();
     let wall = gltf.material(
         json!({"pbrMetallicRoughness": {"baseColorFactor": [0.5, 0.5, 0.5, 1.0], "metallicFactor": 0.0},
+        "extensions": {"KHR_materials_specular": {"specularFactor": 0.0}},
         "emissiveFactor": [1.0, 1.0, 1.0]}),
     );
     let lo = centre.map(|c| c - half);

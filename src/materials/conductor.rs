@@ -4,7 +4,6 @@
 use glam::{Vec2, Vec3, Vec4};
 
 use super::{face_toward, microfacet, BsdfSample};
-use crate::sampling::basis;
 use crate::spectrum::SampledSpectrum;
 
 /// Mirror reflection of `wo` about `n`.
@@ -14,61 +13,39 @@ pub fn reflect(wo: Vec3, n: Vec3) -> Vec3 {
 
 /// The perfect mirror: `wi` is `wo` reflected, weight `F(cos)`.
 pub fn sample_smooth(f0: SampledSpectrum, n: Vec3, wo: Vec3) -> Option<BsdfSample> {
-    let n = face_toward(n, wo);
-    let weight = microfacet::schlick(f0, n.dot(wo));
-    Some(BsdfSample { wi: reflect(wo, n), weight, pdf: 0.0, is_delta: true })
+    sample_mirror(microfacet::schlick(f0, face_toward(n, wo).dot(wo)), n, wo)
 }
 
-/// `wo` and `wi` in the frame of `n` (flipped to the side of `wo`).
-fn to_local(n: Vec3, wo: Vec3, wi: Vec3) -> (Vec3, Vec3, [Vec3; 3]) {
+/// A mirror reflecting `weight`: `wi` is `wo` reflected about `n` (flipped to the side of `wo`).
+pub fn sample_mirror(weight: SampledSpectrum, n: Vec3, wo: Vec3) -> Option<BsdfSample> {
     let n = face_toward(n, wo);
-    let (t, b) = basis(n);
-    let local = |w: Vec3| Vec3::new(w.dot(t), w.dot(b), w.dot(n));
-    (local(wo), local(wi), [t, b, n])
+    Some(BsdfSample { wi: reflect(wo, n), weight, pdf: 0.0, is_delta: true })
 }
 
 /// GGX reflection `D G F / (4 |wo.n| |wi.n|)`.
 pub fn eval_rough(f0: SampledSpectrum, alpha: f32, n: Vec3, wo: Vec3, wi: Vec3) -> SampledSpectrum {
-    let (wo, wi, _) = to_local(n, wo, wi);
-    if wo.z <= 0.0 || wi.z <= 0.0 {
-        return Vec4::ZERO;
+    let (wo, wi, _) = microfacet::to_local(n, wo, wi);
+    match microfacet::reflection(alpha, wo, wi) {
+        Some((value, cos_h)) => microfacet::schlick(f0, cos_h) * value,
+        None => Vec4::ZERO,
     }
-    let h = (wo + wi).normalize();
-    let d = microfacet::distribution(alpha, h);
-    let g = microfacet::masking_shadowing(alpha, wo, wi);
-    d * g * microfacet::schlick(f0, wo.dot(h)) / (4.0 * wo.z * wi.z)
 }
 
-/// The density of visible-normal sampling: `D(h) G1(wo) / (4 wo.z)` (Heitz 2018, eq. 17 with
-/// the reflection Jacobian `1 / (4 wo.h)`).
+/// The density of visible-normal sampling.
 pub fn pdf_rough(alpha: f32, n: Vec3, wo: Vec3, wi: Vec3) -> f32 {
-    let (wo, wi, _) = to_local(n, wo, wi);
-    if wo.z <= 0.0 || wi.z <= 0.0 {
-        return 0.0;
-    }
-    let h = (wo + wi).normalize();
-    microfacet::distribution(alpha, h) * microfacet::masking(alpha, wo) / (4.0 * wo.z)
+    let (wo, wi, _) = microfacet::to_local(n, wo, wi);
+    microfacet::reflection_pdf(alpha, wo, wi)
 }
 
 /// Visible-normal sampling: the weight is `F G2 / G1(wo)`.
 pub fn sample_rough(f0: SampledSpectrum, alpha: f32, n: Vec3, wo: Vec3, u: Vec2) -> Option<BsdfSample> {
-    let (wo_local, _, [t, b, n]) = to_local(n, wo, wo);
-    if wo_local.z <= 0.0 {
-        return None;
-    }
-    let h = microfacet::sample_visible_normal(alpha, wo_local, u);
-    let wi_local = reflect(wo_local, h);
-    if wi_local.z <= 0.0 {
-        return None;
-    }
-    let weight = microfacet::schlick(f0, wo_local.dot(h))
-        * microfacet::masking_shadowing(alpha, wo_local, wi_local)
-        / microfacet::masking(alpha, wo_local);
-    let wi = t * wi_local.x + b * wi_local.y + n * wi_local.z;
+    let (wo_local, _, [t, b, n]) = microfacet::to_local(n, wo, wo);
+    let s = microfacet::sample_reflection(alpha, wo_local, u)?;
+    let wi = t * s.wi.x + b * s.wi.y + n * s.wi.z;
     Some(BsdfSample {
         wi: wi.normalize(),
-        weight,
-        pdf: microfacet::distribution(alpha, h) * microfacet::masking(alpha, wo_local) / (4.0 * wo_local.z),
+        weight: microfacet::schlick(f0, s.cos_h) * s.weight,
+        pdf: s.pdf,
         is_delta: false,
     })
 }

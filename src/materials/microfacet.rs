@@ -5,6 +5,9 @@
 
 use glam::{Vec2, Vec3, Vec4};
 
+use super::conductor::reflect;
+use super::face_toward;
+use crate::sampling::basis;
 use crate::spectrum::SampledSpectrum;
 use std::f32::consts::PI;
 
@@ -48,4 +51,64 @@ pub fn sample_visible_normal(alpha: f32, wo: Vec3, u: Vec2) -> Vec3 {
 /// Schlick's Fresnel approximation.
 pub fn schlick(f0: SampledSpectrum, cos_theta: f32) -> SampledSpectrum {
     f0 + (Vec4::ONE - f0) * (1.0 - cos_theta.clamp(0.0, 1.0)).powi(5)
+}
+
+/// `wo` and `wi` in the frame of `n` (flipped to the side of `wo`), and that frame.
+pub fn to_local(n: Vec3, wo: Vec3, wi: Vec3) -> (Vec3, Vec3, [Vec3; 3]) {
+    let n = face_toward(n, wo);
+    let (t, b) = basis(n);
+    let local = |w: Vec3| Vec3::new(w.dot(t), w.dot(b), w.dot(n));
+    (local(wo), local(wi), [t, b, n])
+}
+
+/// GGX reflection in a local frame without its Fresnel term: `D G2 / (4 wo.z wi.z)` and the
+/// cosine `wo.h` the Fresnel term takes, or `None` below the surface.
+pub fn reflection(alpha: f32, wo: Vec3, wi: Vec3) -> Option<(f32, f32)> {
+    if wo.z <= 0.0 || wi.z <= 0.0 {
+        return None;
+    }
+    let h = (wo + wi).normalize();
+    let value = distribution(alpha, h) * masking_shadowing(alpha, wo, wi) / (4.0 * wo.z * wi.z);
+    Some((value, wo.dot(h)))
+}
+
+/// The density of visible-normal sampling in a local frame: `D(h) G1(wo) / (4 wo.z)` (Heitz
+/// 2018, eq. 17 with the reflection Jacobian `1 / (4 wo.h)`).
+pub fn reflection_pdf(alpha: f32, wo: Vec3, wi: Vec3) -> f32 {
+    if wo.z <= 0.0 || wi.z <= 0.0 {
+        return 0.0;
+    }
+    let h = (wo + wi).normalize();
+    distribution(alpha, h) * masking(alpha, wo) / (4.0 * wo.z)
+}
+
+/// A reflected direction by visible-normal sampling in a local frame.
+pub struct ReflectionSample {
+    /// The direction, local.
+    pub wi: Vec3,
+    /// `G2 / G1(wo)`: the weight without the Fresnel term.
+    pub weight: f32,
+    /// The cosine `wo.h` the Fresnel term takes.
+    pub cos_h: f32,
+    /// The density of `wi`.
+    pub pdf: f32,
+}
+
+/// Samples GGX reflection in a local frame (`None` when the reflection points below).
+pub fn sample_reflection(alpha: f32, wo: Vec3, u: Vec2) -> Option<ReflectionSample> {
+    if wo.z <= 0.0 {
+        return None;
+    }
+    let h = sample_visible_normal(alpha, wo, u);
+    let wi = reflect(wo, h);
+    if wi.z <= 0.0 {
+        return None;
+    }
+    let g1 = masking(alpha, wo);
+    Some(ReflectionSample {
+        wi,
+        weight: masking_shadowing(alpha, wo, wi) / g1,
+        cos_h: wo.dot(h),
+        pdf: distribution(alpha, h) * g1 / (4.0 * wo.z),
+    })
 }

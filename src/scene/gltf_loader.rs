@@ -10,7 +10,7 @@
 
 use std::path::Path;
 
-use super::gltf_checks;
+use super::{gltf_checks, gltf_unrendered};
 
 use glam::{Quat, Vec2, Vec3, Vec4};
 use gltf::animation::util::ReadOutputs;
@@ -77,6 +77,7 @@ pub fn load(path: &Path) -> Result<Description, SceneError> {
     let material_offset = materials.len() as u32;
     materials.push(Material::default_grey());
     let rig = rig(&document, &buffers).map_err(fail)?;
+    let unrendered = document.materials().flat_map(|m| gltf_unrendered::material_warnings(&m)).collect();
     let mut builder = Builder {
         buffers: &buffers,
         materials,
@@ -84,7 +85,7 @@ pub fn load(path: &Path) -> Result<Description, SceneError> {
         lights: Vec::new(),
         camera: None,
         wanted_camera: scene_extras.camera.clone(),
-        warnings: Vec::new(),
+        warnings: unrendered,
         material_offset,
         thin_materials: Default::default(),
     };
@@ -113,7 +114,7 @@ pub fn load(path: &Path) -> Result<Description, SceneError> {
         resolution: scene_extras.resolution,
         fps,
         shutter,
-        warnings: builder.warnings,
+        warnings: unique(builder.warnings),
     };
     if description
         .meshes
@@ -125,6 +126,12 @@ pub fn load(path: &Path) -> Result<Description, SceneError> {
         description.warnings.push("the scene has no light: the image will be black".into());
     }
     Ok(description)
+}
+
+/// `lines` without repeats (a mesh drawn by several nodes warns once), in their first order.
+fn unique(lines: Vec<String>) -> Vec<String> {
+    let mut seen = std::collections::HashSet::new();
+    lines.into_iter().filter(|line| seen.insert(line.clone())).collect()
 }
 
 /// Every node's parent, rest transform and animation tracks.
@@ -242,7 +249,9 @@ impl Builder<'_> {
         let name = node.name().unwrap_or("unnamed");
         let extras: NodeExtras =
             extras::parse(node.extras()).map_err(|e| format!("node '{name}' extras `caustic`: {e}"))?;
+        self.warnings.extend(gltf_unrendered::node_warnings(node));
         if let Some(mesh) = node.mesh() {
+            self.warnings.extend(gltf_unrendered::mesh_warnings(&mesh));
             self.add_mesh(&mesh, node.index())?;
         }
         if let Some(camera) = node.camera() {

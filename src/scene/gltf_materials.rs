@@ -6,7 +6,7 @@ use std::sync::Arc;
 use glam::Vec3;
 
 use super::extras::{self, MaterialExtras};
-use crate::materials::{BaseColour, Material, Texture};
+use crate::materials::{BaseColour, Material, Specular, Texture};
 use crate::spectrum::{Dispersion, RgbSpectrum};
 
 /// A glTF material as a Caustic material.
@@ -24,7 +24,15 @@ pub fn material(m: &gltf::Material, images: &[gltf::image::Data]) -> Result<Mate
         None => BaseColour::Constant(RgbSpectrum::reflectance(factor)),
     };
     let emission = Vec3::from(m.emissive_factor()) * m.emissive_strength().unwrap_or(1.0);
+    let specular = m
+        .specular()
+        .map_or((1.0, Vec3::ONE), |s| (s.specular_factor(), Vec3::from(s.specular_color_factor())));
     Ok(Material {
+        specular: Specular::new(
+            m.ior().unwrap_or(1.5),
+            specular.0.clamp(0.0, 1.0),
+            specular.1.max(Vec3::ZERO),
+        ),
         name,
         base_colour,
         metallic: pbr.metallic_factor().clamp(0.0, 1.0),

@@ -13,6 +13,7 @@ pub mod extras;
 mod gltf_checks;
 mod gltf_loader;
 mod gltf_materials;
+mod gltf_unrendered;
 pub mod pose;
 mod shapes;
 

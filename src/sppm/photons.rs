@@ -108,7 +108,7 @@ pub fn continue_photon(
         let material = &scene.materials[surface.material as usize];
         let wo = -state.direction;
         let rng = &mut state.rng;
-        let bsdf = material.bsdf(surface.uv, &pass.wavelengths, rng.next_1d());
+        let bsdf = material.bsdf(surface.uv, surface.frame.n, wo, &pass.wavelengths, rng.next_1d());
         if !bsdf.is_delta() && state.depth > 0 {
             let ng = if surface.frame.ng.dot(wo) < 0.0 { -surface.frame.ng } else { surface.frame.ng };
             out.push(Photon { p: surface.p, wi: wo, ng, flux: state.flux, hero_only: state.hero_only });

@@ -119,7 +119,7 @@ pub fn continue_eye_path(
         let wo = -state.direction;
         state.radiance += state.beta * material.emitted(&pass.wavelengths, surface.frame.ng, wo);
         let rng = &mut state.rng;
-        let bsdf = material.bsdf(surface.uv, &pass.wavelengths, rng.next_1d());
+        let bsdf = material.bsdf(surface.uv, surface.frame.n, wo, &pass.wavelengths, rng.next_1d());
         if bsdf == Bsdf::Black {
             break;
         }

@@ -307,9 +307,18 @@ impl GltfBuilder {
             "buffers": [{"byteLength": self.buffer.len(), "uri": uri}],
             "cameras": self.cameras,
         });
+        let mut used: std::collections::BTreeSet<String> = self
+            .materials
+            .iter()
+            .filter_map(|m| m["extensions"].as_object())
+            .flat_map(|e| e.keys().cloned())
+            .collect();
         if !self.lights.is_empty() {
-            doc["extensionsUsed"] = json!(["KHR_lights_punctual"]);
+            used.insert("KHR_lights_punctual".into());
             doc["extensions"] = json!({"KHR_lights_punctual": {"lights": self.lights}});
+        }
+        if !used.is_empty() {
+            doc["extensionsUsed"] = json!(used);
         }
         if !self.animations.is_empty() {
             doc["animations"] = json!(self.animations);
@@ -355,9 +364,11 @@ impl GltfBuilder {
     }
 }
 
-/// A Lambertian glTF material of linear colour `rgb` (no specular layer).
+/// A Lambertian glTF material of linear colour `rgb` (no specular layer: `KHR_materials_specular`
+/// with a factor of 0, as Blender writes a Principled BSDF whose Specular IOR Level is 0).
 pub fn diffuse(rgb: [f32; 3]) -> Value {
-    json!({"pbrMetallicRoughness": {"baseColorFactor": [rgb[0], rgb[1], rgb[2], 1.0], "metallicFactor": 0.0, "roughnessFactor": 1.0}})
+    json!({"pbrMetallicRoughness": {"baseColorFactor": [rgb[0], rgb[1], rgb[2], 1.0], "metallicFactor": 0.0, "roughnessFactor": 1.0},
+        "extensions": {"KHR_materials_specular": {"specularFactor": 0.0}}})
 }
 
 /// Loads a `.gltf` file as JSON, for tests that edit a bundled scene.

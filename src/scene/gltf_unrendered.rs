@@ -1,0 +1,96 @@
+//! What a glTF file holds that Caustic does not render, each named in a warning line for its
+//! material, mesh or node, so that no difference from Blender is silent. (A required extension
+//! Caustic cannot read is refused before this, by the gltf crate's validation.)
+//!
+//! Occlusion textures are not light transport and are ignored without a warning.
+
+use gltf::material::AlphaMode;
+
+/// Material extensions Caustic renders.
+const RENDERED_MATERIAL_EXTENSIONS: &[&str] = &[
+    "KHR_materials_dispersion",
+    "KHR_materials_emissive_strength",
+    "KHR_materials_ior",
+    "KHR_materials_specular",
+    "KHR_materials_transmission",
+];
+
+/// One line for each thing in material `m` that is not rendered.
+pub fn material_warnings(m: &gltf::Material) -> Vec<String> {
+    let name = m.name().unwrap_or("unnamed");
+    let mut unrendered: Vec<String> = m
+        .extensions()
+        .into_iter()
+        .flat_map(|e| e.keys())
+        .filter(|k| !RENDERED_MATERIAL_EXTENSIONS.contains(&k.as_str()))
+        .map(|k| format!("{k} is not rendered"))
+        .collect();
+    unrendered.extend(unrendered_textures(m));
+    match m.alpha_mode() {
+        AlphaMode::Opaque => {}
+        mode => unrendered.push(format!("alpha mode {mode:?} is not rendered (the surface is opaque)")),
+    }
+    let rough = m.pbr_metallic_roughness().roughness_factor() > 0.0;
+    if rough && m.transmission().is_some_and(|t| t.transmission_factor() > 0.0) {
+        unrendered.push("rough transmission is not rendered (it renders as smooth glass)".into());
+    }
+    unrendered.into_iter().map(|what| format!("material '{name}': {what}")).collect()
+}
+
+/// The textures of `m` that are not read, and texture inputs read in part.
+fn unrendered_textures(m: &gltf::Material) -> Vec<String> {
+    let pbr = m.pbr_metallic_roughness();
+    let named = [
+        ("metallic-roughness", pbr.metallic_roughness_texture().is_some()),
+        ("normal", m.normal_texture().is_some()),
+        ("emissive", m.emissive_texture().is_some()),
+        ("specular", has_texture(m, "KHR_materials_specular", "specularTexture")),
+        ("specular colour", has_texture(m, "KHR_materials_specular", "specularColorTexture")),
+    ];
+    let mut unrendered: Vec<String> = named
+        .iter()
+        .filter(|(_, present)| *present)
+        .map(|(what, _)| format!("its {what} texture is not rendered"))
+        .collect();
+    if let Some(base) = pbr.base_color_texture() {
+        if base.tex_coord() != 0 {
+            unrendered.push(format!("texture coordinate set {} is not read (set 0 is)", base.tex_coord()));
+        }
+        if base.extension_value("KHR_texture_transform").is_some() {
+            unrendered.push("KHR_texture_transform is not rendered".into());
+        }
+    }
+    unrendered
+}
+
+fn has_texture(m: &gltf::Material, extension: &str, texture: &str) -> bool {
+    m.extension_value(extension).is_some_and(|e| e.get(texture).is_some())
+}
+
+/// One line for each thing in mesh `mesh` that is not rendered.
+pub fn mesh_warnings(mesh: &gltf::Mesh) -> Vec<String> {
+    let name = mesh.name().unwrap_or("unnamed");
+    let primitives: Vec<_> = mesh.primitives().collect();
+    let has = |f: &dyn Fn(&gltf::Primitive) -> bool| primitives.iter().any(f);
+    let mut unrendered = Vec::new();
+    if has(&|p| p.get(&gltf::Semantic::Colors(0)).is_some()) {
+        unrendered.push("vertex colours (COLOR_0) are not rendered".to_string());
+    }
+    if has(&|p| p.morph_targets().next().is_some()) {
+        unrendered.push("morph targets (shape keys) are not rendered: the mesh keeps its basis shape".into());
+    }
+    unrendered.into_iter().map(|what| format!("mesh '{name}': {what}")).collect()
+}
+
+/// One line for each thing on node `node` that is not rendered.
+pub fn node_warnings(node: &gltf::Node) -> Vec<String> {
+    let name = node.name().unwrap_or("unnamed");
+    let mut unrendered = Vec::new();
+    if node.skin().is_some() {
+        unrendered.push("its skin is not rendered: the mesh stays in its rest pose".to_string());
+    }
+    if node.extension_value("EXT_mesh_gpu_instancing").is_some() {
+        unrendered.push("EXT_mesh_gpu_instancing is not rendered: one instance is drawn".into());
+    }
+    unrendered.into_iter().map(|what| format!("node '{name}': {what}")).collect()
+}
