@@ -49,3 +49,9 @@ fn addon_renders_inside_blender() {
 fn addon_packages_install() {
     run_script("test_package.py");
 }
+
+/// Blender parity: scenes built in bpy, rendered through the add-on, against Cycles' references.
+#[test]
+fn addon_renders_match_cycles() {
+    run_script("test_parity.py");
+}

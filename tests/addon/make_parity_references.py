@@ -1,0 +1,79 @@
+"""Renders the Cycles references for the parity tests (tests/addon/parity_scenes.py) into
+tests/references/parity/<scene>.exr, and their provenance into tests/references/parity/README.json:
+
+    target/bpy-venv/bin/python tests/addon/make_parity_references.py [--samples 4096] [SCENE ...]
+
+Cycles on the CPU, the scene's 64x64, a 1-pixel box filter, no denoising, no adaptive sampling,
+no glossy filter, 32 bounces of every kind; each EXR holds `Combined.R/G/B` and `Index.X` (the
+object-index pass: which object each pixel sees).
+"""
+import argparse
+import datetime
+import json
+import os
+import pathlib
+import sys
+import tempfile
+
+os.environ["HOME"] = tempfile.mkdtemp(prefix="caustic-parity-home-")
+import bpy  # noqa: E402
+import numpy as np  # noqa: E402
+import OpenEXR  # noqa: E402
+
+HERE = pathlib.Path(__file__).resolve().parent
+sys.path.insert(0, str(HERE))
+import parity_scenes  # noqa: E402
+
+OUT = HERE.parents[0] / "references" / "parity"
+
+
+def render_cycles(samples, path):
+    scene = bpy.context.scene
+    scene.render.engine = 'CYCLES'
+    cycles = scene.cycles
+    cycles.device, cycles.samples = 'CPU', samples
+    cycles.use_adaptive_sampling = cycles.use_denoising = False
+    cycles.pixel_filter_type, cycles.filter_width, cycles.blur_glossy = 'BOX', 1.0, 0.0
+    for bounces in ("max_bounces", "diffuse_bounces", "glossy_bounces", "transmission_bounces",
+                    "transparent_max_bounces"):
+        setattr(cycles, bounces, 32)
+    bpy.context.view_layer.use_pass_object_index = True
+    scene.render.image_settings.media_type = 'MULTI_LAYER_IMAGE'
+    scene.render.image_settings.file_format = 'OPEN_EXR_MULTILAYER'
+    scene.render.image_settings.color_depth = '32'
+    scene.render.filepath = str(path)
+    bpy.ops.render.render(write_still=True)
+    # Blender 5.0 writes each pass as its own part.
+    channels = {k: v for part in OpenEXR.File(str(path)).parts for k, v in part.channels.items()}
+    combined = next(v for k, v in channels.items() if k.endswith("Combined"))
+    index = next(v for k, v in channels.items() if k.endswith("Object Index.X"))
+    return combined.pixels[..., :3], index.pixels.reshape(combined.pixels.shape[:2])
+
+
+def main():
+    parser = argparse.ArgumentParser()
+    parser.add_argument("--samples", type=int, default=4096)
+    parser.add_argument("scenes", nargs="*", default=sorted(parity_scenes.SCENES))
+    args = parser.parse_args()
+    OUT.mkdir(parents=True, exist_ok=True)
+    provenance_path = OUT / "README.json"
+    provenance = json.loads(provenance_path.read_text()) if provenance_path.exists() else {}
+    for name in args.scenes:
+        parity_scenes.SCENES[name]()
+        with tempfile.TemporaryDirectory() as tmp:
+            rgb, index = render_cycles(args.samples, pathlib.Path(tmp) / "cycles.exr")
+        channels = {"Combined": rgb.astype(np.float32), "Index.X": index.astype(np.float32)}
+        OpenEXR.File({"compression": OpenEXR.ZIP_COMPRESSION}, channels).write(str(OUT / f"{name}.exr"))
+        provenance[name] = {
+            "renderer": f"Cycles (bpy {bpy.app.version_string}), CPU",
+            "samples": args.samples,
+            "settings": "64x64, 1-pixel box filter, no denoising, no adaptive sampling, no glossy filter, 32 bounces",
+            "scene": f"tests/addon/parity_scenes.py: {name}()",
+            "made": datetime.date.today().isoformat(),
+        }
+        print(f"{name}: mean {rgb.mean(axis=(0, 1))}")
+    provenance_path.write_text(json.dumps(provenance, indent=1, sort_keys=True) + "\n")
+
+
+if __name__ == "__main__":
+    main()
