@@ -8,6 +8,8 @@
 //! CI never fails by chance); to search further, `CAUSTIC_FUZZ_CASES=5000 CAUSTIC_FUZZ_SEED=random
 //! cargo test --release --test fuzz` (or a number for the seed).
 
+mod common;
+
 use caustic::frames::{self, RenderSettings};
 use caustic::scene::Description;
 use proptest::prelude::*;
@@ -69,6 +71,50 @@ fn try_bytes(name: &str, bytes: &[u8]) -> Result<(), String> {
         let _ = std::fs::copy(&path, std::env::temp_dir().join(format!("caustic-fuzz-crash-{name}")));
     }
     result
+}
+
+/// A small PNG as a data URI.
+fn png_uri(width: u32, height: u32, rgba: [u8; 4]) -> String {
+    use base64::Engine;
+    let mut png = Vec::new();
+    image::RgbaImage::from_pixel(width, height, image::Rgba(rgba))
+        .write_to(&mut std::io::Cursor::new(&mut png), image::ImageFormat::Png)
+        .unwrap();
+    format!("data:image/png;base64,{}", base64::engine::general_purpose::STANDARD.encode(png))
+}
+
+/// A scene with every texture and vertex input Caustic reads: base colour on the second
+/// texture coordinate set through `KHR_texture_transform`, metallic-roughness, a normal map,
+/// a specular layer, `COLOR_0`, `TEXCOORD_1` and `TANGENT`, under a uniform world.
+fn textured_seed() -> Value {
+    let mut gltf = common::GltfBuilder::default();
+    let quad = [
+        [[-1.0, 0.0, -1.0], [-1.0, 0.0, 1.0], [1.0, 0.0, 1.0]],
+        [[-1.0, 0.0, -1.0], [1.0, 0.0, 1.0], [1.0, 0.0, -1.0]],
+    ];
+    let uvs: Vec<[f32; 2]> =
+        quad.iter().flatten().map(|p| [(p[0] + 1.0) / 2.0, (p[2] + 1.0) / 2.0]).collect();
+    let material = gltf.material(json!({
+        "pbrMetallicRoughness": {"baseColorTexture": {"index": 0, "texCoord": 1,
+            "extensions": {"KHR_texture_transform": {"offset": [0.5, 0.0], "rotation": 0.3, "scale": [2.0, 2.0]}}},
+            "metallicRoughnessTexture": {"index": 1}},
+        "normalTexture": {"index": 2, "scale": 0.5},
+        "extensions": {"KHR_materials_specular": {"specularFactor": 0.7}}}));
+    gltf.mesh_with_uvs("Ground", &quad, &uvs, material);
+    gltf.attribute("TEXCOORD_1", &uvs.concat(), 2, "VEC2");
+    gltf.attribute("COLOR_0", &[[0.9f32, 0.5, 0.1, 1.0]; 6].concat(), 4, "VEC4");
+    gltf.attribute("TANGENT", &[[1.0f32, 0.0, 0.0, 1.0]; 6].concat(), 4, "VEC4");
+    gltf.camera([0.0, 3.0, 0.0], [0.0, -1.0, 0.0], 0.8);
+    gltf.scene_extras(json!({"world": {"color": [1.0, 1.0, 1.0], "strength": 1.0}}));
+    let mut doc = gltf.to_json();
+    doc["images"] = json!([
+        {"uri": png_uri(4, 2, [200, 50, 50, 255])},
+        {"uri": png_uri(2, 2, [0, 128, 255, 255])},
+        {"uri": png_uri(2, 2, [160, 128, 230, 255])},
+    ]);
+    doc["textures"] = json!([{"source": 0}, {"source": 1}, {"source": 2}]);
+    doc["extensionsUsed"].as_array_mut().unwrap().push(json!("KHR_texture_transform"));
+    doc
 }
 
 /// A value to put in place of any JSON value.
@@ -145,13 +191,27 @@ proptest! {
     #[test]
     fn real_json_with_hostile_values_never_panics(seed in any::<u64>()) {
         let mut rng = rand_pcg::Pcg64::seed_from_u64(seed);
-        let name = ["furnace.gltf", "cornell_animated.gltf", "prism.gltf", "spot_glass.gltf"][rng.random_range(0..4)];
-        let mut doc: Value = serde_json::from_slice(&std::fs::read(scenes().join(name)).unwrap()).unwrap();
+        let name = ["furnace.gltf", "cornell_animated.gltf", "prism.gltf", "spot_glass.gltf", "textured"][rng.random_range(0..5)];
+        let mut doc: Value = match name {
+            "textured" => textured_seed(),
+            _ => serde_json::from_slice(&std::fs::read(scenes().join(name)).unwrap()).unwrap(),
+        };
         for _ in 0..rng.random_range(1..4) {
             mutate(&mut doc, &mut rng);
         }
         prop_assert_eq!(try_bytes("mutated.gltf", doc.to_string().as_bytes()), Ok(()));
     }
+}
+
+/// The textured seed itself loads and renders (so its mutations explore past the loader).
+#[test]
+fn the_textured_seed_renders() {
+    let dir = tempfile::tempdir().unwrap();
+    let path = dir.path().join("textured.gltf");
+    std::fs::write(&path, textured_seed().to_string()).unwrap();
+    let description = Description::load(&path).unwrap();
+    assert!(description.warnings.is_empty(), "{:?}", description.warnings);
+    load_and_render(&path).unwrap();
 }
 
 /// Inputs that crashed the loader once (tests/fuzz/*.gltf, *.glb) load or are refused cleanly.

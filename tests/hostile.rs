@@ -256,3 +256,72 @@ fn an_interrupted_render_keeps_its_frames_and_resumes() {
         );
     }
 }
+
+/// CRC-32 (PNG's), for writing a PNG header by hand.
+fn crc32(bytes: &[u8]) -> u32 {
+    let mut crc = !0u32;
+    for &b in bytes {
+        crc ^= u32::from(b);
+        for _ in 0..8 {
+            crc = if crc & 1 != 0 { (crc >> 1) ^ 0xEDB8_8320 } else { crc >> 1 };
+        }
+    }
+    !crc
+}
+
+/// Hostile textures are refused with a message naming the image, never a panic or an
+/// out-of-memory: a truncated PNG, and a PNG that claims 100,000 x 100,000 texels.
+#[test]
+fn hostile_textures_are_refused() {
+    let dir = tempfile::tempdir().unwrap();
+    let d = dir.path();
+    let mut png = Vec::new();
+    image::RgbImage::from_pixel(8, 8, image::Rgb([200, 100, 50]))
+        .write_to(&mut std::io::Cursor::new(&mut png), image::ImageFormat::Png)
+        .unwrap();
+    std::fs::write(d.join("truncated.png"), &png[..png.len() / 2]).unwrap();
+    // The IHDR chunk's width and height (bytes 16..24) and its CRC (bytes 29..33).
+    let mut huge = png.clone();
+    huge[16..20].copy_from_slice(&100_000u32.to_be_bytes());
+    huge[20..24].copy_from_slice(&100_000u32.to_be_bytes());
+    let crc = crc32(&huge[12..29]);
+    huge[29..33].copy_from_slice(&crc.to_be_bytes());
+    std::fs::write(d.join("huge.png"), &huge).unwrap();
+    for image in ["truncated.png", "huge.png"] {
+        let path = furnace_edited(d, &format!("{image}.gltf"), |doc| {
+            doc["images"] = json!([{"uri": image}]);
+            doc["textures"] = json!([{"source": 0}]);
+            doc["materials"][0]["normalTexture"] = json!({"index": 0});
+        });
+        assert_refused(&path, &[image, "image"]);
+    }
+}
+
+/// Hostile texture references and attributes render with a warning naming the material or mesh:
+/// a texture on a texture coordinate set Caustic does not carry, and tangents that are not
+/// finite numbers.
+#[test]
+fn hostile_texture_references_are_named() {
+    let dir = tempfile::tempdir().unwrap();
+    let d = dir.path();
+    image::RgbImage::from_pixel(2, 2, image::Rgb([128, 128, 255])).save(d.join("flat.png")).unwrap();
+    let mut gltf = GltfBuilder::default();
+    gltf.texture("flat.png");
+    let material = gltf.material(json!({"name": "Bumpy", "normalTexture": {"index": 0},
+        "pbrMetallicRoughness": {"baseColorTexture": {"index": 0, "texCoord": 7}}}));
+    gltf.mesh("Panel", &[[[0.0, 0.0, 0.0], [1.0, 0.0, 0.0], [0.0, 1.0, 0.0]]], material);
+    gltf.attribute("TANGENT", &[[f32::NAN, 0.0, 0.0, 1.0]; 3].concat(), 4, "VEC4");
+    gltf.camera([0.0, 0.0, 3.0], [0.0, 0.0, -1.0], 0.5);
+    gltf.scene_extras(json!({"world": {"color": [1.0, 1.0, 1.0], "strength": 1.0}}));
+    let path = gltf.write(d, "hostile_refs");
+    let output = run_within_a_minute(render_command(&path, d));
+    let text = String::from_utf8_lossy(&output.stderr);
+    assert!(output.status.success(), "{text}");
+    for expected in [
+        "material 'Bumpy': its base colour texture reads texture coordinate set 7",
+        "mesh 'Panel': TANGENT has values that are not finite numbers; ignored",
+        "mesh 'Panel': its normal map is not applied",
+    ] {
+        assert!(text.contains(expected), "no '{expected}' in:\n{text}");
+    }
+}

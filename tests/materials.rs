@@ -81,3 +81,193 @@ fn unrendered_features_are_named() {
         assert!(stderr.contains(expected), "no '{expected}' in:\n{stderr}");
     }
 }
+
+/// The corners of the ground square spanning x and z in [-1, 1] at y = 0 (two triangles), and
+/// their texture coordinates: u = (x + 1) / 2 and v = (z + 1) / 2.
+const GROUND: [[[f32; 3]; 3]; 2] = [
+    [[-1.0, 0.0, -1.0], [-1.0, 0.0, 1.0], [1.0, 0.0, 1.0]],
+    [[-1.0, 0.0, -1.0], [1.0, 0.0, 1.0], [1.0, 0.0, -1.0]],
+];
+
+fn ground_uvs() -> Vec<[f32; 2]> {
+    GROUND.iter().flatten().map(|p| [(p[0] + 1.0) / 2.0, (p[2] + 1.0) / 2.0]).collect()
+}
+
+/// The ground of `material` seen from straight above (image x along world +x, 32 x 32 pixels
+/// over x in [-1.02, 1.02]), lit as `light` says: a uniform white world, or a sun.
+fn ground(dir: &Path, material: Value, images: &[&str], light: Light, passes: u64) -> Image {
+    let mut gltf = GltfBuilder::default();
+    for image in images {
+        gltf.texture(image);
+    }
+    let material = gltf.material(material);
+    gltf.mesh_with_uvs("Ground", &GROUND, &ground_uvs(), material);
+    gltf.camera([0.0, 4.0, 0.0], [0.0, -1.0, 0.0], 0.5);
+    match light {
+        Light::WhiteWorld => gltf.scene_extras(
+            json!({"resolution": [32, 32], "world": {"color": [1.0, 1.0, 1.0], "strength": 1.0}}),
+        ),
+        Light::Sun(from) => {
+            let to = from.map(|c| -c);
+            gltf.light(json!({"type": "directional", "intensity": 683.0}), from, to);
+            gltf.scene_extras(json!({"resolution": [32, 32]}));
+        }
+        Light::Point => {
+            gltf.light(json!({"type": "point", "intensity": 100.0}), [0.0, 2.0, 0.0], [0.0, -1.0, 0.0]);
+            gltf.scene_extras(json!({"resolution": [32, 32]}));
+        }
+    }
+    let path = gltf.write(dir, "ground");
+    render(&settings(&path, dir, passes), 2)
+}
+
+enum Light {
+    WhiteWorld,
+    Sun([f32; 3]),
+    Point,
+}
+
+/// A Lambertian material (no specular layer) with glTF fields merged in.
+fn lambert(extra: Value) -> Value {
+    let mut material = diffuse([0.8, 0.8, 0.8]);
+    for (key, value) in extra.as_object().unwrap() {
+        material[key] = value.clone();
+    }
+    material
+}
+
+/// A normal map bends the shading normal as its texels say, in the frame of the texture's u
+/// (red) and of the image's up, decreasing v (green), with tangents MikkTSpace generates: a
+/// normal tilted 30 degrees toward the sun, which stands 45 degrees from the zenith, receives
+/// cos 15 / cos 45 = 1.366 times the light of the flat ground (2%), and tilted away,
+/// cos 75 / cos 45 = 0.366.
+#[test]
+fn a_normal_map_bends_the_light_as_its_texels_say() {
+    let dir = tempfile::tempdir().unwrap();
+    let tilt = 30f32.to_radians();
+    let (side, up) = ((0.5 + 0.5 * tilt.sin()) * 255.0, (0.5 + 0.5 * tilt.cos()) * 255.0);
+    let write = |name: &str, rgb: [f32; 3]| {
+        image::RgbImage::from_pixel(4, 4, image::Rgb(rgb.map(|c| c.round() as u8)))
+            .save(dir.path().join(name))
+            .unwrap();
+    };
+    write("toward_u.png", [side, 127.5, up]);
+    write("toward_up.png", [127.5, side, up]);
+    let s = std::f32::consts::FRAC_1_SQRT_2;
+    let luminance = |material: Value, images: &[&str], sun: [f32; 3]| {
+        ground(dir.path(), material, images, Light::Sun(sun), 16).luminance(8, 24, 8, 24)
+    };
+    let mapped = lambert(json!({"normalTexture": {"index": 0}}));
+    // The image's up is decreasing v: world -z.
+    for (image, toward, away) in
+        [("toward_u.png", [s, s, 0.0], [-s, s, 0.0]), ("toward_up.png", [0.0, s, -s], [0.0, s, s])]
+    {
+        let flat = luminance(lambert(json!({})), &[], toward);
+        let ratio = luminance(mapped.clone(), &[image], toward) / flat;
+        let cos = |deg: f64| deg.to_radians().cos();
+        assert!((ratio / (cos(15.0) / cos(45.0)) - 1.0).abs() < 0.02, "{image} toward the sun: {ratio}");
+        let ratio = luminance(mapped.clone(), &[image], away) / flat;
+        assert!((ratio / (cos(75.0) / cos(45.0)) - 1.0).abs() < 0.02, "{image} away from the sun: {ratio}");
+    }
+}
+
+/// A 16-bit PNG base colour is read at its depth and decoded from sRGB: under a white world the
+/// ground's radiance is its albedo (2%).
+#[test]
+fn a_16_bit_base_colour_texture_is_read() {
+    let dir = tempfile::tempdir().unwrap();
+    let value = 30000u16;
+    image::ImageBuffer::<image::Rgb<u16>, _>::from_pixel(4, 4, image::Rgb([value; 3]))
+        .save(dir.path().join("grey16.png"))
+        .unwrap();
+    let material =
+        lambert(json!({"pbrMetallicRoughness": {"baseColorTexture": {"index": 0}, "metallicFactor": 0.0}}));
+    let image = ground(dir.path(), material, &["grey16.png"], Light::WhiteWorld, 16);
+    let c = f64::from(value) / 65535.0;
+    let expected = ((c + 0.055) / 1.055).powf(2.4);
+    for (ch, mean) in image.mean(8, 24, 8, 24).iter().enumerate() {
+        assert!((mean / expected - 1.0).abs() < 0.02, "channel {ch}: {mean} vs {expected}");
+    }
+}
+
+/// The metallic-roughness texture drives both: blue is metallic and green roughness, times
+/// their factors. Its left half (u < 0.5, x < 0) is a smooth metal, which mirrors the black sky
+/// under a point light, and its right half a rough dielectric, lit.
+#[test]
+fn the_metallic_roughness_texture_drives_metal_and_roughness() {
+    let dir = tempfile::tempdir().unwrap();
+    let texels =
+        image::RgbImage::from_fn(
+            4,
+            1,
+            |x, _| if x < 2 { image::Rgb([0, 0, 255]) } else { image::Rgb([0, 255, 0]) },
+        );
+    texels.save(dir.path().join("mr.png")).unwrap();
+    let material = lambert(json!({"pbrMetallicRoughness": {"baseColorFactor": [0.8, 0.8, 0.8, 1.0],
+        "metallicFactor": 1.0, "roughnessFactor": 1.0, "metallicRoughnessTexture": {"index": 0}}}));
+    let image = ground(dir.path(), material, &["mr.png"], Light::Point, 16);
+    let (metal, rough) = (image.luminance(6, 10, 14, 18), image.luminance(22, 26, 14, 18));
+    // The rough half: albedo 0.8 / pi times 100 cd / 683 at 2 m, about 0.0093.
+    assert!(rough > 0.008 && metal < 1e-3 * rough, "metal {metal}, rough {rough}");
+}
+
+/// `COLOR_0` multiplies the base colour: a white ground with red vertices is red.
+#[test]
+fn vertex_colours_multiply_the_base_colour() {
+    let dir = tempfile::tempdir().unwrap();
+    let mut gltf = GltfBuilder::default();
+    let material = gltf.material(lambert(
+        json!({"pbrMetallicRoughness": {"baseColorFactor": [1.0, 1.0, 1.0, 1.0], "metallicFactor": 0.0}}),
+    ));
+    gltf.mesh_with_uvs("Ground", &GROUND, &ground_uvs(), material);
+    gltf.attribute("COLOR_0", &[[0.9f32, 0.1, 0.1, 1.0]; 6].concat(), 4, "VEC4");
+    gltf.camera([0.0, 4.0, 0.0], [0.0, -1.0, 0.0], 0.5);
+    gltf.scene_extras(json!({"resolution": [16, 16], "world": {"color": [1.0, 1.0, 1.0], "strength": 1.0}}));
+    let path = gltf.write(dir.path(), "coloured");
+    let image = render(&settings(&path, dir.path(), 16), 2);
+    let [r, g, b] = image.mean(4, 12, 4, 12);
+    assert!((r - 0.9).abs() < 0.03 && (g - 0.1).abs() < 0.02 && (b - 0.1).abs() < 0.02, "{r} {g} {b}");
+}
+
+/// `KHR_texture_transform` (here a required extension, as Blender writes it for a Mapping node)
+/// moves the texture: an offset of half the image swaps a two-colour texture's halves.
+#[test]
+fn texture_transform_moves_the_texture() {
+    let dir = tempfile::tempdir().unwrap();
+    let texels = image::RgbImage::from_fn(4, 1, |x, _| {
+        if x < 2 {
+            image::Rgb([255, 255, 255])
+        } else {
+            image::Rgb([0, 0, 0])
+        }
+    });
+    texels.save(dir.path().join("halves.png")).unwrap();
+    let render_with = |transform: Value| {
+        let info = json!({"index": 0, "extensions": {"KHR_texture_transform": transform}});
+        let material =
+            lambert(json!({"pbrMetallicRoughness": {"baseColorTexture": info, "metallicFactor": 0.0}}));
+        let mut gltf = GltfBuilder::default();
+        gltf.texture("halves.png");
+        let m = gltf.material(material);
+        gltf.mesh_with_uvs("Ground", &GROUND, &ground_uvs(), m);
+        gltf.camera([0.0, 4.0, 0.0], [0.0, -1.0, 0.0], 0.5);
+        gltf.scene_extras(
+            json!({"resolution": [32, 32], "world": {"color": [1.0, 1.0, 1.0], "strength": 1.0}}),
+        );
+        let mut doc = gltf.to_json();
+        doc["extensionsRequired"] = json!(["KHR_texture_transform"]);
+        doc["extensionsUsed"].as_array_mut().unwrap().push(json!("KHR_texture_transform"));
+        let path = dir.path().join("transformed.gltf");
+        std::fs::write(&path, doc.to_string()).unwrap();
+        render(&settings(&path, dir.path(), 4), 2)
+    };
+    let plain = render_with(json!({}));
+    let moved = render_with(json!({"offset": [0.5, 0.0]}));
+    let (left, right) = ((6, 10), (22, 26));
+    assert!(
+        plain.luminance(left.0, left.1, 14, 18) > 0.9 && plain.luminance(right.0, right.1, 14, 18) < 0.01
+    );
+    assert!(
+        moved.luminance(left.0, left.1, 14, 18) < 0.01 && moved.luminance(right.0, right.1, 14, 18) > 0.9
+    );
+}

@@ -1,184 +1,35 @@
 //! Materials (what the glTF file says) and BSDFs (a material resolved at a path's wavelengths).
 //!
-//! A [`Material`] holds the glTF metallic-roughness parameters with spectra; [`Material::bsdf`]
-//! resolves it at the pass's wavelengths into a closed [`Bsdf`] with a value per wavelength
-//! (directions and indices follow the hero wavelength). Where the
-//! glTF material mixes lobes (transmission or metallic between 0 and 1), one lobe is chosen by a
-//! random number with its weight as probability, which is unbiased.
+//! A [`Material`] (`material.rs`) holds the glTF metallic-roughness parameters with spectra and
+//! textures (`texture.rs`); [`Material::bsdf`] resolves it at a surface point's inputs
+//! (`inputs.rs`: texture coordinates, vertex colour, tangent) and the pass's wavelengths into a
+//! closed [`Bsdf`] with a value per wavelength (directions and indices follow the hero
+//! wavelength). One lobe or layer per file: `diffuse.rs`, `conductor.rs`, `dielectric.rs`,
+//! `plastic.rs` (the specular layer over the base, with `layer_albedo.rs`), over the GGX
+//! distribution in `microfacet.rs`.
 //!
 //! Directions are world-space unit vectors; `wo` and `wi` both point away from the surface.
 
 mod conductor;
 mod dielectric;
 mod diffuse;
+mod inputs;
 mod layer_albedo;
+mod material;
 mod microfacet;
 mod plastic;
 mod texture;
 
-use std::sync::Arc;
-
 use glam::{Vec2, Vec3, Vec4};
 
-use crate::spectrum::{Dispersion, RgbSpectrum, SampledSpectrum, Wavelengths};
+use crate::spectrum::SampledSpectrum;
 
 pub use dielectric::fresnel_dielectric;
+pub use inputs::{NormalMap, SurfaceInputs, VertexColour};
 pub use layer_albedo::{eta_of_f0, f0_of_eta};
+pub use material::{BaseColour, Material, Specular, SMOOTH_ROUGHNESS};
 pub use plastic::{Coat, Plastic};
-pub use texture::Texture;
-
-/// Roughness below this is treated as perfectly smooth (a delta BSDF).
-pub const SMOOTH_ROUGHNESS: f32 = 0.02;
-
-/// A material's base colour: a constant spectrum or a texture (with the factor baked in).
-#[derive(Clone, Debug)]
-pub enum BaseColour {
-    /// The same reflectance everywhere.
-    Constant(RgbSpectrum),
-    /// A texture looked up at the surface's texture coordinates.
-    Texture(Arc<Texture>),
-}
-
-/// A surface's material: glTF metallic-roughness with transmission, IOR and emission.
-#[derive(Clone, Debug)]
-pub struct Material {
-    /// The material's name, for messages.
-    pub name: String,
-    /// Base colour (reflectance, or the conductor's normal-incidence reflectance).
-    pub base_colour: BaseColour,
-    /// glTF `metallicFactor`.
-    pub metallic: f32,
-    /// glTF `roughnessFactor` (perceptual; alpha = roughness^2).
-    pub roughness: f32,
-    /// The specular layer over a non-metal's base (glTF's dielectric BRDF); `None` for a pure
-    /// Lambertian base (`KHR_materials_specular` with a factor of 0).
-    pub specular: Option<Specular>,
-    /// `KHR_materials_transmission` factor.
-    pub transmission: f32,
-    /// Index of refraction against wavelength: `KHR_materials_ior` (1.5 when absent), with
-    /// `KHR_materials_dispersion` or a law from the `caustic` extras.
-    pub ior: Dispersion,
-    /// Emitted radiance shape (times D65) in W / (m^2 sr), or `None`.
-    pub emission: Option<RgbSpectrum>,
-    /// Whether emission leaves both faces (meshes) or only the front (area lights).
-    pub emits_both_sides: bool,
-    /// Transmission through a thin wall (an open mesh: a window pane modelled as a plane) rather
-    /// than into a solid: glTF's reading of transmission without a volume.
-    pub thin: bool,
-}
-
-/// A non-metal's specular layer as the file gives it: `KHR_materials_specular` over the index.
-#[derive(Clone, Debug, PartialEq)]
-pub struct Specular {
-    /// Normal-incidence reflectance at its colour's brightest: the index's, times the specular
-    /// factor and the colour's largest component (Blender folds a Specular IOR Level above 0.5
-    /// into the colour).
-    pub f0: f32,
-    /// The colour's hue (its largest component 1), tinting `f0` but not grazing reflection.
-    pub tint: RgbSpectrum,
-}
-
-impl Specular {
-    /// The layer of a material of index `ior` with `KHR_materials_specular`'s factor and colour;
-    /// `None` when it reflects nothing (a factor of 0: a pure Lambertian base).
-    pub fn new(ior: f32, factor: f32, colour: Vec3) -> Option<Self> {
-        let scale = colour.max_element();
-        let f0 = (f0_of_eta(ior) * factor * scale).min(0.99);
-        (f0 > 0.0).then(|| Specular { f0, tint: RgbSpectrum::reflectance(colour / scale) })
-    }
-
-    /// The coat at the wavelengths `lambda` with GGX `alpha` (0: smooth).
-    fn coat(&self, lambda: &Wavelengths, alpha: f32) -> Coat {
-        Coat::new(self.tint.eval_lanes(lambda.nm) * self.f0, eta_of_f0(self.f0), alpha)
-    }
-}
-
-impl Material {
-    /// A grey Lambertian material, for meshes without one.
-    pub fn default_grey() -> Self {
-        Material {
-            name: "default".into(),
-            base_colour: BaseColour::Constant(RgbSpectrum::constant(0.8)),
-            metallic: 0.0,
-            roughness: 1.0,
-            specular: None,
-            transmission: 0.0,
-            ior: Dispersion::Constant(1.5),
-            emission: None,
-            emits_both_sides: true,
-            thin: false,
-        }
-    }
-
-    /// The base colour's reflectance at texture coordinate `uv` and the wavelengths `lambda`.
-    pub fn reflectance(&self, uv: Vec2, lambda: &Wavelengths) -> SampledSpectrum {
-        match &self.base_colour {
-            BaseColour::Constant(spectrum) => spectrum.eval_lanes(lambda.nm),
-            BaseColour::Texture(texture) => texture.eval(uv, lambda.nm),
-        }
-    }
-
-    /// The emitted spectral radiance at `lambda` leaving toward `wo` from a face of normal `ng`.
-    pub fn emitted(&self, lambda: &Wavelengths, ng: Vec3, wo: Vec3) -> SampledSpectrum {
-        match &self.emission {
-            Some(spectrum) if self.emits_both_sides || ng.dot(wo) > 0.0 => {
-                spectrum.eval_lanes(lambda.nm) * lambda.d65
-            }
-            _ => Vec4::ZERO,
-        }
-    }
-
-    /// Whether it refracts each wavelength its own way (a transmissive material whose index
-    /// depends on wavelength).
-    pub fn is_dispersive(&self) -> bool {
-        self.transmission > 0.0 && self.ior.is_dispersive()
-    }
-
-    /// Whether `bsdf`, resolved from this material, sends each wavelength its own way: a path
-    /// through it can carry only its hero wavelength.
-    pub fn separates_wavelengths(&self, bsdf: &Bsdf) -> bool {
-        self.ior.is_dispersive() && matches!(bsdf, Bsdf::Dielectric { .. } | Bsdf::ThinDielectric { .. })
-    }
-
-    /// Whether light passes through unchanged (a thin fully transmissive wall of index 1, as area
-    /// lights are): such surfaces cast no shadow.
-    pub fn is_invisible(&self) -> bool {
-        self.thin && self.transmission >= 1.0 && self.ior == Dispersion::Constant(1.0)
-    }
-
-    /// The BSDF at texture coordinate `uv`, seen from `wo` at shading normal `n`, and the
-    /// wavelengths `lambda`, with `u_lobe` a uniform number that picks a lobe where the material
-    /// mixes several.
-    pub fn bsdf(&self, uv: Vec2, n: Vec3, wo: Vec3, lambda: &Wavelengths, u_lobe: f32) -> Bsdf {
-        if u_lobe < self.transmission {
-            let ior = self.ior.index(lambda.hero());
-            return if self.thin { Bsdf::ThinDielectric { ior } } else { Bsdf::Dielectric { ior } };
-        }
-        let reflectance = self.reflectance(uv, lambda);
-        let u_lobe = (u_lobe - self.transmission) / (1.0 - self.transmission);
-        let alpha = self.roughness * self.roughness;
-        if u_lobe < self.metallic {
-            if self.roughness < SMOOTH_ROUGHNESS {
-                return Bsdf::Conductor { f0: reflectance };
-            }
-            return Bsdf::RoughConductor { f0: reflectance, alpha };
-        }
-        if self.emission.is_some() && reflectance == Vec4::ZERO {
-            return Bsdf::Black;
-        }
-        let Some(specular) = &self.specular else {
-            return Bsdf::Diffuse { albedo: reflectance };
-        };
-        let u_lobe = (u_lobe - self.metallic) / (1.0 - self.metallic);
-        let smooth = self.roughness < SMOOTH_ROUGHNESS;
-        let plastic =
-            Plastic { base: reflectance, coat: specular.coat(lambda, if smooth { 0.0 } else { alpha }) };
-        if smooth {
-            return plastic::choose_smooth(plastic, n, wo, u_lobe);
-        }
-        Bsdf::Plastic(plastic)
-    }
-}
+pub use texture::{DataTexture, Rgba, Texture, TextureMap, Wrap, UV_SETS};
 
 /// A BSDF at a path's wavelengths: reflectances per wavelength, indices at the hero's.
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -341,6 +192,7 @@ pub fn face_toward(n: Vec3, w: Vec3) -> Vec3 {
 mod tests {
     use super::*;
     use crate::sampling::{square_to_sphere, stream, Stream};
+    use crate::spectrum::{Dispersion, RgbSpectrum, Wavelengths};
     use glam::DVec4;
 
     const FRAME: ShadingFrame = ShadingFrame { n: Vec3::Z, ng: Vec3::Z };
@@ -470,37 +322,51 @@ mod tests {
             base_colour: BaseColour::Constant(RgbSpectrum::constant(0.8)),
             ..Material::default_grey()
         };
-        let Bsdf::Plastic(p) = default.bsdf(Vec2::ZERO, Vec3::Z, Vec3::Z, &at, 0.5) else { panic!() };
+        let Bsdf::Plastic(p) = default.bsdf(&SurfaceInputs::default(), Vec3::Z, Vec3::Z, &at, 0.5) else {
+            panic!()
+        };
         assert!((p.coat.f0 - Vec4::splat(0.04)).abs().max_element() < 1e-3, "{:?}", p.coat.f0);
         let (head_on, grazing) = (p.coat.albedo(1.0).x, p.coat.albedo(0.1).x);
         assert!(head_on > 0.035 && head_on < 0.06 && grazing > 2.0 * head_on, "{head_on} {grazing}");
         let lambert = Material { specular: Specular::new(1.5, 0.0, Vec3::ONE), ..default };
-        assert!(matches!(lambert.bsdf(Vec2::ZERO, Vec3::Z, Vec3::Z, &at, 0.5), Bsdf::Diffuse { .. }));
+        assert!(matches!(
+            lambert.bsdf(&SurfaceInputs::default(), Vec3::Z, Vec3::Z, &at, 0.5),
+            Bsdf::Diffuse { .. }
+        ));
     }
 
     #[test]
     fn materials_pick_lobes_by_their_weights() {
         let at = |lambda_nm: f32| Wavelengths::single(lambda_nm, 1.0);
         let glass = Material { transmission: 1.0, roughness: 0.0, ..Material::default_grey() };
-        assert_eq!(glass.bsdf(Vec2::ZERO, Vec3::Z, Vec3::Z, &at(550.0), 0.5), Bsdf::Dielectric { ior: 1.5 });
+        assert_eq!(
+            glass.bsdf(&SurfaceInputs::default(), Vec3::Z, Vec3::Z, &at(550.0), 0.5),
+            Bsdf::Dielectric { ior: 1.5 }
+        );
         assert!(!glass.is_dispersive());
         let flint = Material { ior: Dispersion::glass("SF11").unwrap(), ..glass };
         assert!(flint.is_dispersive());
         let (blue, red) = (
-            flint.bsdf(Vec2::ZERO, Vec3::Z, Vec3::Z, &at(450.0), 0.5),
-            flint.bsdf(Vec2::ZERO, Vec3::Z, Vec3::Z, &at(650.0), 0.5),
+            flint.bsdf(&SurfaceInputs::default(), Vec3::Z, Vec3::Z, &at(450.0), 0.5),
+            flint.bsdf(&SurfaceInputs::default(), Vec3::Z, Vec3::Z, &at(650.0), 0.5),
         );
         assert!(
             matches!((blue, red), (Bsdf::Dielectric { ior: b }, Bsdf::Dielectric { ior: r }) if b > r + 0.02)
         );
         let mirror = Material { metallic: 1.0, roughness: 0.0, ..Material::default_grey() };
-        assert!(matches!(mirror.bsdf(Vec2::ZERO, Vec3::Z, Vec3::Z, &at(550.0), 0.5), Bsdf::Conductor { .. }));
+        assert!(matches!(
+            mirror.bsdf(&SurfaceInputs::default(), Vec3::Z, Vec3::Z, &at(550.0), 0.5),
+            Bsdf::Conductor { .. }
+        ));
         let rough = Material { metallic: 1.0, roughness: 0.5, ..Material::default_grey() };
         assert!(matches!(
-            rough.bsdf(Vec2::ZERO, Vec3::Z, Vec3::Z, &at(550.0), 0.5),
+            rough.bsdf(&SurfaceInputs::default(), Vec3::Z, Vec3::Z, &at(550.0), 0.5),
             Bsdf::RoughConductor { alpha: 0.25, .. }
         ));
         let half = Material { metallic: 0.5, ..Material::default_grey() };
-        assert!(matches!(half.bsdf(Vec2::ZERO, Vec3::Z, Vec3::Z, &at(550.0), 0.7), Bsdf::Diffuse { .. }));
+        assert!(matches!(
+            half.bsdf(&SurfaceInputs::default(), Vec3::Z, Vec3::Z, &at(550.0), 0.7),
+            Bsdf::Diffuse { .. }
+        ));
     }
 }

@@ -24,8 +24,10 @@ pub struct MeshInstance {
     pub positions: Vec<Vec3>,
     /// Local vertex normals (zero where the file has none: the face normal is used).
     pub normals: Vec<Vec3>,
-    /// Texture coordinates (zero where the file has none).
+    /// Texture coordinates of the first set (zero where the file has none).
     pub uvs: Vec<Vec2>,
+    /// Attributes only some meshes have, in local space.
+    pub extras: super::VertexExtras,
     /// Triangles, indexing this instance's vertices.
     pub triangles: Vec<TriangleRef>,
 }

@@ -253,6 +253,7 @@ mod tests {
         Geometry {
             normals: vec![Vec3::ZERO; positions.len()],
             uvs: vec![glam::Vec2::ZERO; positions.len()],
+            extras: Default::default(),
             positions,
             triangles: vec![
                 TriangleRef { vertices: [0, 1, 2], material: 0 },
@@ -297,6 +298,7 @@ mod tests {
         let soup = Geometry {
             normals: vec![Vec3::ZERO; positions.len()],
             uvs: vec![glam::Vec2::ZERO; positions.len()],
+            extras: Default::default(),
             triangles: (0..count as u32)
                 .map(|i| TriangleRef { vertices: [3 * i, 3 * i + 1, 3 * i + 2], material: 0 })
                 .collect(),

@@ -2,8 +2,9 @@
 //! [`Description`]: meshes in their nodes' local space and the node rig with its animation
 //! (translation, rotation, scale; `KHR_animation_pointer` cannot be read by the gltf crate).
 //!
-//! Reads the default scene's node tree (nested transforms), triangle meshes with normals and
-//! texture coordinates, metallic-roughness materials with `KHR_materials_transmission`,
+//! Reads the default scene's node tree (nested transforms), triangle meshes with normals,
+//! texture coordinates (sets 0 and 1), vertex colours and tangents (generated where a normal map
+//! needs them), metallic-roughness materials ([`super::gltf_materials`]) with `KHR_materials_transmission`,
 //! `KHR_materials_ior` (absent means 1.5) and `KHR_materials_emissive_strength`,
 //! `KHR_materials_dispersion`, `KHR_lights_punctual`, the perspective camera the scene names (else the first), and the
 //! extras schema in [`super::extras`].
@@ -25,7 +26,7 @@ use super::extras::{
     self, AreaLightExtras, LensExtras, NodeExtras, SceneExtras, ShutterExtras, ShutterPosition,
 };
 use super::gltf_materials::material;
-use super::{shapes, SceneError, TriangleRef};
+use super::{shapes, tangents, SceneError, TriangleRef, VertexExtras};
 use crate::geometry::Cone;
 use crate::lights::World;
 use crate::materials::{BaseColour, Material};
@@ -377,6 +378,7 @@ impl Builder<'_> {
             name: format!("area light '{name}'"),
             normals: vec![-Vec3::Z; positions.len()],
             uvs: vec![Vec2::ZERO; positions.len()],
+            extras: Default::default(),
             positions,
             triangles,
         });
@@ -452,10 +454,12 @@ impl Builder<'_> {
                 .map(|t| t.into_f32().map(Vec2::from).collect())
                 .unwrap_or_else(|| vec![Vec2::ZERO; count]);
             // Attributes must have one entry per position; a mismatched one is dropped, not read past.
+            let warnings = &mut self.warnings;
             let (normals, uvs) = (
-                matching_attribute(normals, count, "NORMAL", name, &mut self.warnings),
-                matching_attribute(uvs, count, "TEXCOORD_0", name, &mut self.warnings),
+                matching_attribute(normals, count, "NORMAL", name, warnings),
+                matching_attribute(uvs, count, "TEXCOORD_0", name, warnings),
             );
+            let extras = vertex_extras(&reader, count, name, warnings);
             let indices: Vec<u32> = match reader.read_indices() {
                 Some(indices) => indices.into_u32().collect(),
                 None => (0..count as u32).collect(),
@@ -479,17 +483,91 @@ impl Builder<'_> {
                     "mesh '{name}': skipped {skipped} degenerate triangles (zero area or non-finite coordinates)"
                 ));
             }
-            self.meshes.push(MeshInstance {
-                node,
-                name: name.to_string(),
-                positions,
-                normals,
-                uvs,
-                triangles,
-            });
+            let mesh =
+                MeshInstance { node, name: name.to_string(), positions, normals, uvs, extras, triangles };
+            let mesh = self.with_tangents(mesh, material);
+            self.meshes.push(mesh);
         }
         Ok(())
     }
+
+    /// `mesh` with tangents for its material's normal map: the file's, else MikkTSpace's; without
+    /// either (no normals or texture coordinates) the map is not applied, with a warning.
+    fn with_tangents(&mut self, mesh: MeshInstance, material: u32) -> MeshInstance {
+        let Some(map) = &self.materials[material as usize].normal_map else { return mesh };
+        if !mesh.extras.tangents.is_empty() {
+            return mesh;
+        }
+        match tangents::with_generated_tangents(&mesh, map.texture.set()) {
+            Some(mesh) => mesh,
+            None => {
+                self.warnings.push(format!(
+                    "mesh '{}': its normal map is not applied (the mesh has no normals or texture coordinates for tangents)",
+                    mesh.name
+                ));
+                mesh
+            }
+        }
+    }
+}
+
+/// `TEXCOORD_1`, `COLOR_0` (fitted to reflectance spectra) and `TANGENT` of a primitive of
+/// `count` vertices; each empty where the primitive has none or a mismatched one (warned).
+fn vertex_extras<'a, 's, F>(
+    reader: &gltf::mesh::Reader<'a, 's, F>,
+    count: usize,
+    name: &str,
+    warnings: &mut Vec<String>,
+) -> VertexExtras
+where
+    F: Clone + Fn(gltf::Buffer<'a>) -> Option<&'s [u8]>,
+{
+    let uvs1: Vec<Vec2> =
+        reader.read_tex_coords(1).map(|t| t.into_f32().map(Vec2::from).collect()).unwrap_or_default();
+    let colours: Vec<Vec4> =
+        reader.read_colors(0).map(|c| c.into_rgba_f32().map(Vec4::from).collect()).unwrap_or_default();
+    let tangents: Vec<Vec4> = reader.read_tangents().map(|t| t.map(Vec4::from).collect()).unwrap_or_default();
+    let tangents = optional_attribute(tangents, count, "TANGENT", name, warnings);
+    let finite = tangents.iter().all(|t| t.is_finite());
+    if !finite {
+        warnings.push(format!("mesh '{name}': TANGENT has values that are not finite numbers; ignored"));
+    }
+    VertexExtras {
+        uvs1: optional_attribute(uvs1, count, "TEXCOORD_1", name, warnings),
+        colours: reflectances(&optional_attribute(colours, count, "COLOR_0", name, warnings)),
+        tangents: if finite { tangents } else { Vec::new() },
+    }
+}
+
+/// An attribute only some meshes have: `values` when it has `count` entries, else none (with a
+/// warning when the file gave a mismatched one).
+fn optional_attribute<T: Default + Clone>(
+    values: Vec<T>,
+    count: usize,
+    attribute: &str,
+    mesh: &str,
+    warnings: &mut Vec<String>,
+) -> Vec<T> {
+    if values.is_empty() || values.len() == count {
+        return values;
+    }
+    matching_attribute(values, count, attribute, mesh, warnings);
+    Vec::new()
+}
+
+/// Linear RGB colours as reflectance spectra, fitted once per colour at 10 bits a channel.
+fn reflectances(colours: &[Vec4]) -> Vec<RgbSpectrum> {
+    let mut cache = std::collections::HashMap::new();
+    colours
+        .iter()
+        .map(|c| {
+            let key =
+                c.truncate().clamp(Vec3::ZERO, Vec3::ONE).to_array().map(|v| (v * 1023.0).round() as u16);
+            *cache
+                .entry(key)
+                .or_insert_with(|| RgbSpectrum::reflectance(Vec3::from(key.map(|v| f32::from(v) / 1023.0))))
+        })
+        .collect()
 }
 
 /// `values` when it has `count` entries (one per position); otherwise zeros, with a warning.

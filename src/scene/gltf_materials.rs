@@ -1,12 +1,14 @@
-//! glTF materials into Caustic materials: metallic-roughness, transmission, the index of
-//! refraction and its dispersion law, emission, and base-colour textures.
+//! glTF materials into Caustic materials: metallic-roughness, the specular layer, transmission,
+//! the index of refraction and its dispersion law, emission, and the base-colour,
+//! metallic-roughness and normal textures.
 
 use std::sync::Arc;
 
 use glam::Vec3;
 
 use super::extras::{self, MaterialExtras};
-use crate::materials::{BaseColour, Material, Specular, Texture};
+use super::gltf_textures::{decode, info_map, normal_map};
+use crate::materials::{BaseColour, DataTexture, Material, NormalMap, Specular, Texture};
 use crate::spectrum::{Dispersion, RgbSpectrum};
 
 /// A glTF material as a Caustic material.
@@ -14,14 +16,24 @@ pub fn material(m: &gltf::Material, images: &[gltf::image::Data]) -> Result<Mate
     let name = m.name().unwrap_or("unnamed").to_string();
     let pbr = m.pbr_metallic_roughness();
     let factor = Vec3::from_slice(&pbr.base_color_factor()[..3]);
-    let base_colour = match pbr.base_color_texture() {
-        Some(info) => {
-            let image = &images[info.texture().source().index()];
-            BaseColour::Texture(Arc::new(
-                texture(image, factor).map_err(|e| format!("material '{name}': {e}"))?,
-            ))
+    let in_material = |e: String| format!("material '{name}': {e}");
+    let image = |texture: gltf::Texture| decode(&images[texture.source().index()]).map_err(in_material);
+    let base_colour = match pbr.base_color_texture().and_then(|i| Some((info_map(&i)?, i))) {
+        Some((map, info)) => {
+            BaseColour::Texture(Arc::new(Texture::reflectance(&image(info.texture())?, map, factor)))
         }
         None => BaseColour::Constant(RgbSpectrum::reflectance(factor)),
+    };
+    let metallic_roughness = match pbr.metallic_roughness_texture().and_then(|i| Some((info_map(&i)?, i))) {
+        Some((map, info)) => Some(Arc::new(DataTexture::new(&image(info.texture())?, map))),
+        None => None,
+    };
+    let normal_map = match m.normal_texture().and_then(|n| Some((normal_map(&n)?, n))) {
+        Some((map, normal)) => Some(NormalMap {
+            texture: Arc::new(DataTexture::new(&image(normal.texture())?, map)),
+            scale: if normal.scale().is_finite() { normal.scale() } else { 1.0 },
+        }),
+        None => None,
     };
     let emission = Vec3::from(m.emissive_factor()) * m.emissive_strength().unwrap_or(1.0);
     let specular = m
@@ -35,6 +47,8 @@ pub fn material(m: &gltf::Material, images: &[gltf::image::Data]) -> Result<Mate
         ),
         name,
         base_colour,
+        metallic_roughness,
+        normal_map,
         metallic: pbr.metallic_factor().clamp(0.0, 1.0),
         roughness: pbr.roughness_factor().clamp(0.0, 1.0),
         transmission: m.transmission().map_or(0.0, |t| t.transmission_factor()).clamp(0.0, 1.0),
@@ -86,18 +100,4 @@ fn dispersion_law(m: &gltf::Material) -> Result<Dispersion, String> {
         Some(v_d) => Dispersion::Abbe { n_d, v_d },
         None => Dispersion::Constant(n_d),
     })
-}
-
-fn texture(image: &gltf::image::Data, factor: Vec3) -> Result<Texture, String> {
-    use gltf::image::Format;
-    let channels = match image.format {
-        Format::R8G8B8 => 3,
-        Format::R8G8B8A8 => 4,
-        other => {
-            return Err(format!(
-                "base colour texture format {other:?} is not supported (use 8-bit RGB or RGBA)"
-            ))
-        }
-    };
-    Ok(Texture::from_srgb8(image.width as usize, image.height as usize, channels, &image.pixels, factor))
 }

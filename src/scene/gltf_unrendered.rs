@@ -6,6 +6,9 @@
 
 use gltf::material::AlphaMode;
 
+use super::gltf_textures::{info_set, normal_set};
+use crate::materials::UV_SETS;
+
 /// Material extensions Caustic renders.
 const RENDERED_MATERIAL_EXTENSIONS: &[&str] = &[
     "KHR_materials_dispersion",
@@ -37,12 +40,11 @@ pub fn material_warnings(m: &gltf::Material) -> Vec<String> {
     unrendered.into_iter().map(|what| format!("material '{name}': {what}")).collect()
 }
 
-/// The textures of `m` that are not read, and texture inputs read in part.
+/// The textures of `m` that are not read: those Caustic does not render yet, and those on a
+/// texture coordinate set it does not carry.
 fn unrendered_textures(m: &gltf::Material) -> Vec<String> {
     let pbr = m.pbr_metallic_roughness();
     let named = [
-        ("metallic-roughness", pbr.metallic_roughness_texture().is_some()),
-        ("normal", m.normal_texture().is_some()),
         ("emissive", m.emissive_texture().is_some()),
         ("specular", has_texture(m, "KHR_materials_specular", "specularTexture")),
         ("specular colour", has_texture(m, "KHR_materials_specular", "specularColorTexture")),
@@ -52,12 +54,16 @@ fn unrendered_textures(m: &gltf::Material) -> Vec<String> {
         .filter(|(_, present)| *present)
         .map(|(what, _)| format!("its {what} texture is not rendered"))
         .collect();
-    if let Some(base) = pbr.base_color_texture() {
-        if base.tex_coord() != 0 {
-            unrendered.push(format!("texture coordinate set {} is not read (set 0 is)", base.tex_coord()));
-        }
-        if base.extension_value("KHR_texture_transform").is_some() {
-            unrendered.push("KHR_texture_transform is not rendered".into());
+    let sets = [
+        ("base colour", pbr.base_color_texture().map(|i| info_set(&i))),
+        ("metallic-roughness", pbr.metallic_roughness_texture().map(|i| info_set(&i))),
+        ("normal", m.normal_texture().map(|n| normal_set(&n))),
+    ];
+    for (what, set) in sets {
+        if let Some(set) = set.filter(|&s| s as usize >= UV_SETS) {
+            unrendered.push(format!(
+                "its {what} texture reads texture coordinate set {set}, which is not rendered (sets 0 and 1 are)"
+            ));
         }
     }
     unrendered
@@ -72,10 +78,7 @@ pub fn mesh_warnings(mesh: &gltf::Mesh) -> Vec<String> {
     let name = mesh.name().unwrap_or("unnamed");
     let primitives: Vec<_> = mesh.primitives().collect();
     let has = |f: &dyn Fn(&gltf::Primitive) -> bool| primitives.iter().any(f);
-    let mut unrendered = Vec::new();
-    if has(&|p| p.get(&gltf::Semantic::Colors(0)).is_some()) {
-        unrendered.push("vertex colours (COLOR_0) are not rendered".to_string());
-    }
+    let mut unrendered: Vec<String> = Vec::new();
     if has(&|p| p.morph_targets().next().is_some()) {
         unrendered.push("morph targets (shape keys) are not rendered: the mesh keeps its basis shape".into());
     }

@@ -7,15 +7,18 @@
 //! read a `Scene` and never change it. Emitting triangles are also lights.
 
 pub mod animation;
+mod attributes;
 pub mod description;
 mod edges;
 pub mod extras;
 mod gltf_checks;
 mod gltf_loader;
 mod gltf_materials;
+mod gltf_textures;
 mod gltf_unrendered;
 pub mod pose;
 mod shapes;
+mod tangents;
 
 use std::path::{Path, PathBuf};
 use std::sync::Arc;
@@ -25,9 +28,10 @@ use glam::{Vec2, Vec3, Vec3A};
 use crate::accel::{Bvh, Hit};
 use crate::camera::Camera;
 use crate::lights::{BoundingSphere, Light};
-use crate::materials::{Material, ShadingFrame};
+use crate::materials::{Material, ShadingFrame, SurfaceInputs};
 use crate::spectrum::{SampledSpectrum, Wavelengths};
 
+pub use attributes::VertexExtras;
 pub use description::Description;
 pub use edges::{OpenEdges, OpenSides};
 pub use pose::{Prepared, TimeRange};
@@ -62,8 +66,10 @@ pub struct Geometry {
     pub positions: Vec<Vec3>,
     /// Unit shading normals (zero where the file has none).
     pub normals: Vec<Vec3>,
-    /// Texture coordinates.
+    /// Texture coordinates (the first set).
     pub uvs: Vec<Vec2>,
+    /// Attributes only some meshes have.
+    pub extras: VertexExtras,
     /// The triangles.
     pub triangles: Vec<TriangleRef>,
 }
@@ -94,7 +100,8 @@ impl Geometry {
         let ng = hit.ng;
         let n = if n == Vec3::ZERO { ng } else { n };
         let uv = self.uvs[i0] * w[0] + self.uvs[i1] * w[1] + self.uvs[i2] * w[2];
-        Surface { p: hit.p, frame: ShadingFrame { n, ng }, uv, material: t.material, scale: hit.scale }
+        let inputs = self.extras.inputs([i0, i1, i2], Vec3::from(w), uv);
+        Surface { p: hit.p, frame: ShadingFrame { n, ng }, inputs, material: t.material, scale: hit.scale }
     }
 
     /// The smallest and largest corner of the finite vertices, or `None` when there are none
@@ -145,8 +152,8 @@ pub struct Surface {
     pub p: Vec3,
     /// Shading and geometric normals.
     pub frame: ShadingFrame,
-    /// Texture coordinates.
-    pub uv: Vec2,
+    /// What the material reads there: texture coordinates, vertex colour, tangent.
+    pub inputs: SurfaceInputs,
     /// Index into `Scene::materials`.
     pub material: u32,
     /// The largest coordinate of its triangle's corners (how far rounding can have moved `p`).

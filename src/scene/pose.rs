@@ -61,6 +61,7 @@ fn flatten(mesh: &MeshInstance, world: Mat4, out: &mut Geometry) {
     out.positions.extend(mesh.positions.iter().map(|&p| world.transform_point3(p)));
     out.normals.extend(mesh.normals.iter().map(|&n| (normal_matrix * n).normalize_or_zero()));
     out.uvs.extend_from_slice(&mesh.uvs);
+    out.extras.append(base as usize, &mesh.extras, mesh.positions.len(), Mat3::from_mat4(world));
     out.triangles.extend(mesh.triangles.iter().map(|t| {
         let [a, b, c] = t.vertices.map(|v| base + v);
         super::TriangleRef { vertices: if mirrored { [a, c, b] } else { [a, b, c] }, material: t.material }

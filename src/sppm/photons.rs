@@ -108,7 +108,8 @@ pub fn continue_photon(
         let material = &scene.materials[surface.material as usize];
         let wo = -state.direction;
         let rng = &mut state.rng;
-        let bsdf = material.bsdf(surface.uv, surface.frame.n, wo, &pass.wavelengths, rng.next_1d());
+        let frame = material.shading_frame(&surface.inputs, surface.frame);
+        let bsdf = material.bsdf(&surface.inputs, frame.n, wo, &pass.wavelengths, rng.next_1d());
         if !bsdf.is_delta() && state.depth > 0 {
             let ng = if surface.frame.ng.dot(wo) < 0.0 { -surface.frame.ng } else { surface.frame.ng };
             out.push(Photon { p: surface.p, wi: wo, ng, flux: state.flux, hero_only: state.hero_only });
@@ -116,7 +117,7 @@ pub fn continue_photon(
         }
         let u = rng.next_2d();
         let u_lobe = bsdf.lobe_number(|| rng.next_1d());
-        let Some(sample) = bsdf.sample(surface.frame, wo, u, u_lobe, Transport::Importance) else {
+        let Some(sample) = bsdf.sample(frame, wo, u, u_lobe, Transport::Importance) else {
             break;
         };
         // Russian roulette with the throughput's change (its mean over the wavelengths) as the

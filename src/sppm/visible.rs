@@ -119,14 +119,15 @@ pub fn continue_eye_path(
         let wo = -state.direction;
         state.radiance += state.beta * material.emitted(&pass.wavelengths, surface.frame.ng, wo);
         let rng = &mut state.rng;
-        let bsdf = material.bsdf(surface.uv, surface.frame.n, wo, &pass.wavelengths, rng.next_1d());
+        let frame = material.shading_frame(&surface.inputs, surface.frame);
+        let bsdf = material.bsdf(&surface.inputs, frame.n, wo, &pass.wavelengths, rng.next_1d());
         if bsdf == Bsdf::Black {
             break;
         }
         if !bsdf.is_delta() {
             let visible = VisiblePoint {
                 p: surface.p,
-                frame: surface.frame,
+                frame,
                 wo,
                 bsdf,
                 beta: state.beta,
@@ -142,7 +143,7 @@ pub fn continue_eye_path(
         }
         let u = rng.next_2d();
         let u_lobe = bsdf.lobe_number(|| rng.next_1d());
-        let Some(sample) = bsdf.sample(surface.frame, wo, u, u_lobe, Transport::Radiance) else {
+        let Some(sample) = bsdf.sample(frame, wo, u, u_lobe, Transport::Radiance) else {
             break;
         };
         if !state.hero_only && material.separates_wavelengths(&bsdf) {

@@ -94,4 +94,104 @@ def principled_spheres():
     return {"Floor": 1, "Grey": 2, "Black": 3}
 
 
-SCENES = {"principled_spheres": principled_spheres}
+def image(name, width, height, texel, colorspace='sRGB'):
+    """A packed image of `width` x `height` whose texel (x, y from the bottom, as Blender counts)
+    is the RGBA `texel(x, y)`."""
+    img = bpy.data.images.new(name, width, height, alpha=True)
+    img.colorspace_settings.name = colorspace
+    img.pixels.foreach_set([c for y in range(height) for x in range(width) for c in texel(x, y)])
+    img.pack()
+    return img
+
+
+def texture_node(material, img, location=(-600, 0)):
+    node = material.node_tree.nodes.new("ShaderNodeTexImage")
+    node.image = img
+    node.location = location
+    return node
+
+
+def checker_floor():
+    """A floor with a checker texture through a Mapping node (scaled and rotated)."""
+    m = principled("Checker floor", Roughness=0.8)
+    nodes, links = m.node_tree.nodes, m.node_tree.links
+    # Closest: Cycles interpolates 8-bit sRGB texels before decoding them and Caustic after,
+    # which differs along the cells' edges (up to 9% of the floor's mean with Linear).
+    cell = lambda x, y: (0.9, 0.9, 0.9, 1) if (x // 8 + y // 8) % 2 else (0.05, 0.2, 0.6, 1)
+    tex = texture_node(m, image("checker", 64, 64, cell))
+    tex.interpolation = 'Closest'
+    mapping = nodes.new("ShaderNodeMapping")
+    mapping.inputs["Scale"].default_value = (2.0, 2.0, 1.0)
+    mapping.inputs["Rotation"].default_value = (0.0, 0.0, math.radians(30))
+    coords = nodes.new("ShaderNodeTexCoord")
+    links.new(coords.outputs["UV"], mapping.inputs["Vector"])
+    links.new(mapping.outputs["Vector"], tex.inputs["Vector"])
+    links.new(tex.outputs["Color"], nodes["Principled BSDF"].inputs["Base Color"])
+    return m
+
+
+def metal_with_map():
+    """Gold whose metallic and roughness come from one image through Separate Color: metal in
+    stripes, roughness rising across."""
+    m = principled("Striped metal", Base_Color=(1.0, 0.77, 0.34, 1.0))
+    nodes, links = m.node_tree.nodes, m.node_tree.links
+    tex = texture_node(m, image("metal-rough", 8, 8, lambda x, y: (0, 0.2 + 0.1 * x, 1.0 if y % 4 < 2 else 0.0, 1),
+                                'Non-Color'))
+    separate = nodes.new("ShaderNodeSeparateColor")
+    links.new(tex.outputs["Color"], separate.inputs["Color"])
+    links.new(separate.outputs["Blue"], nodes["Principled BSDF"].inputs["Metallic"])
+    links.new(separate.outputs["Green"], nodes["Principled BSDF"].inputs["Roughness"])
+    return m
+
+
+def bumpy():
+    """A grey material whose Normal Map node tilts the normal along u and v in a pattern."""
+    m = principled("Bumpy", Base_Color=(0.6, 0.6, 0.6, 1.0), Roughness=0.9)
+    nodes, links = m.node_tree.nodes, m.node_tree.links
+    tilt = lambda x, y: (0.5 + (0.3 if x % 32 < 16 else -0.3), 0.5 + (0.3 if y % 32 < 16 else -0.3), 0.8, 1)
+    tex = texture_node(m, image("normals", 64, 64, tilt, 'Non-Color'))
+    normal_map = nodes.new("ShaderNodeNormalMap")
+    links.new(tex.outputs["Color"], normal_map.inputs["Color"])
+    links.new(normal_map.outputs["Normal"], nodes["Principled BSDF"].inputs["Normal"])
+    return m
+
+
+def vertex_coloured(obj):
+    """Colours `obj`'s corners by position through a Color Attribute node."""
+    mesh = obj.data
+    attribute = mesh.color_attributes.new("Col", 'FLOAT_COLOR', 'CORNER')
+    for loop in mesh.loops:
+        p = mesh.vertices[loop.vertex_index].co
+        attribute.data[loop.index].color = (0.5 + 0.5 * p.x, 0.5 + 0.5 * p.y, 0.5 + 0.5 * p.z, 1.0)
+    m = principled("Vertex coloured", Roughness=0.6)
+    node = m.node_tree.nodes.new("ShaderNodeVertexColor")
+    node.layer_name = "Col"
+    m.node_tree.links.new(node.outputs["Color"], m.node_tree.nodes["Principled BSDF"].inputs["Base Color"])
+    obj.data.materials.append(m)
+
+
+def textured():
+    """A checker floor through a Mapping node, a gold sphere with a metallic-roughness map and a
+    vertex-coloured cube."""
+    clear()
+    studio(checker_floor())
+    add(bpy.ops.mesh.primitive_uv_sphere_add, metal_with_map(), index=2, segments=64, ring_count=32, radius=0.9,
+        location=(-1.3, 0.3, 0.9))
+    bpy.ops.object.shade_smooth()
+    coloured = add(bpy.ops.mesh.primitive_cube_add, index=4, size=1.4, location=(0.9, 0.8, 0.7))
+    vertex_coloured(coloured)
+    camera((0.0, -7.0, 3.5), (0.0, 0.3, 0.6))
+    return {"Floor": 1, "Gold": 2, "Coloured": 4}
+
+
+def normal_mapped():
+    """A normal-mapped cube (a Normal Map node) on the checker floor."""
+    clear()
+    studio(checker_floor())
+    cube = add(bpy.ops.mesh.primitive_cube_add, bumpy(), index=3, size=1.8, location=(0.0, 0.0, 0.9))
+    cube.rotation_euler = (0.0, 0.0, math.radians(30))
+    camera((0.0, -7.0, 3.5), (0.0, 0.0, 0.8))
+    return {"Floor": 1, "Bumpy": 3}
+
+
+SCENES = {"principled_spheres": principled_spheres, "textured": textured, "normal_mapped": normal_mapped}

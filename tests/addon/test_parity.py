@@ -79,9 +79,9 @@ def block_median_difference(image, reference, block=8):
 
 
 def save_sheet(name, image, reference):
-    """Caustic, Cycles and 4x their difference side by side, in sRGB."""
+    """Caustic, Cycles and 4x their difference side by side, in sRGB, each pixel 4 x 4."""
     difference = np.abs(image - reference) * 4.0
-    sheet = np.concatenate([image, reference, difference], axis=1)
+    sheet = np.concatenate([image, reference, difference], axis=1).repeat(4, axis=0).repeat(4, axis=1)
     srgb = np.where(sheet <= 0.0031308, 12.92 * sheet, 1.055 * np.power(np.clip(sheet, 0, None), 1 / 2.4) - 0.055)
     pixels = (np.clip(srgb, 0, 1) * 255 + 0.5).astype(np.uint8)
     h, w = pixels.shape[:2]
@@ -117,6 +117,15 @@ class Parity(unittest.TestCase):
 
     def test_principled_spheres(self):
         self.check("principled_spheres")
+
+    def test_textured(self):
+        self.check("textured")
+
+    # Known gap: Caustic's normal-mapped cube reads 1.3x Cycles' (the normal map's analytic tests
+    # in tests/materials.rs pass; the difference with Cycles is not yet found).
+    @unittest.expectedFailure
+    def test_normal_mapped(self):
+        self.check("normal_mapped")
 
 
 if __name__ == "__main__":

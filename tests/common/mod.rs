@@ -197,6 +197,13 @@ impl GltfBuilder {
         self.meshes.last_mut().unwrap()["primitives"][0]["attributes"]["TEXCOORD_0"] = json!(uv);
     }
 
+    /// Gives the last mesh's primitive the float attribute `name` (`components` per vertex, glTF
+    /// accessor type `kind`).
+    pub fn attribute(&mut self, name: &str, values: &[f32], components: usize, kind: &str) {
+        let accessor = self.add_accessor(values, components, kind);
+        self.meshes.last_mut().unwrap()["primitives"][0]["attributes"][name] = json!(accessor);
+    }
+
     /// Adds a non-indexed triangle mesh (flat normals) with `material`.
     pub fn mesh(&mut self, name: &str, triangles: &[[[f32; 3]; 3]], material: usize) {
         let mut positions = Vec::new();

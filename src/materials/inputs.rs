@@ -1,0 +1,73 @@
+//! What a material reads at a surface point besides its normals: texture coordinates, the vertex
+//! colour (`COLOR_0`) and the tangent a normal map is expressed in. A mesh without vertex colours
+//! or tangents carries none, and its materials pay nothing for them.
+
+use std::sync::Arc;
+
+use glam::{Vec2, Vec3, Vec4};
+
+use super::texture::{DataTexture, UV_SETS};
+use super::ShadingFrame;
+use crate::spectrum::RgbSpectrum;
+
+/// The vertex colour at a point: the triangle's three corner spectra and the point's barycentric
+/// weights (spectra are interpolated by value at each wavelength, as texels are).
+#[derive(Clone, Copy, Debug)]
+pub struct VertexColour {
+    /// The corners' reflectance spectra.
+    pub corners: [RgbSpectrum; 3],
+    /// Barycentric weights of the point.
+    pub weights: Vec3,
+}
+
+impl VertexColour {
+    /// The colour's reflectance at four wavelengths, nm.
+    pub fn eval(&self, lambda_nm: Vec4) -> Vec4 {
+        let [a, b, c] = self.corners.map(|s| s.eval_lanes(lambda_nm));
+        a * self.weights.x + b * self.weights.y + c * self.weights.z
+    }
+}
+
+/// A surface point's inputs to its material.
+#[derive(Clone, Copy, Debug, Default)]
+pub struct SurfaceInputs {
+    /// Texture coordinates, one pair per set (zero where the mesh has no such set).
+    pub uv: [Vec2; UV_SETS],
+    /// `COLOR_0`, multiplying the base colour, if the mesh has it.
+    pub colour: Option<VertexColour>,
+    /// World-space tangent (xyz) and handedness (w: the bitangent is `w n x t`); zero where the
+    /// mesh has none.
+    pub tangent: Vec4,
+}
+
+/// A tangent-space normal map (glTF `normalTexture`): RGB in [0, 1] to a normal in [-1, 1], x
+/// and y scaled by `scale`.
+#[derive(Clone, Debug)]
+pub struct NormalMap {
+    /// The image.
+    pub texture: Arc<DataTexture>,
+    /// glTF's `normalTexture.scale`.
+    pub scale: f32,
+}
+
+impl NormalMap {
+    /// The shading frame with its normal bent by the map (the geometric normal unchanged). Without
+    /// a tangent, or where the map's normal would face away from the surface, the frame is kept.
+    pub fn apply(&self, inputs: &SurfaceInputs, frame: ShadingFrame) -> ShadingFrame {
+        let t = inputs.tangent.truncate();
+        if t == Vec3::ZERO {
+            return frame;
+        }
+        let n = frame.n;
+        // Gram-Schmidt: the interpolated tangent made perpendicular to the shading normal.
+        let t = (t - n * n.dot(t)).normalize_or_zero();
+        let b = n.cross(t) * inputs.tangent.w.signum();
+        let texel = self.texture.eval(&inputs.uv) * 2.0 - Vec4::ONE;
+        let local = Vec3::new(texel.x * self.scale, texel.y * self.scale, texel.z);
+        let bent = (t * local.x + b * local.y + n * local.z).normalize_or_zero();
+        if bent == Vec3::ZERO || !bent.is_finite() || bent.dot(frame.ng) * n.dot(frame.ng) <= 0.0 {
+            return frame;
+        }
+        ShadingFrame { n: bent, ng: frame.ng }
+    }
+}

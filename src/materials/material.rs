@@ -1,0 +1,200 @@
+//! A surface's material as the file gives it (glTF metallic-roughness with its extensions,
+//! textures resolved at load), and its resolution at a surface point and a path's wavelengths
+//! into a closed [`Bsdf`]: where the glTF material mixes lobes (transmission or metallic between
+//! 0 and 1), one lobe is chosen by a random number with its weight as probability, which is
+//! unbiased.
+
+use std::sync::Arc;
+
+use glam::{Vec3, Vec4};
+
+use super::inputs::{NormalMap, SurfaceInputs};
+use super::layer_albedo::{eta_of_f0, f0_of_eta};
+use super::plastic::{self, Coat, Plastic};
+use super::texture::{DataTexture, Texture};
+use super::{Bsdf, ShadingFrame};
+use crate::spectrum::{Dispersion, RgbSpectrum, SampledSpectrum, Wavelengths};
+
+/// Roughness below this is treated as perfectly smooth (a delta BSDF).
+pub const SMOOTH_ROUGHNESS: f32 = 0.02;
+
+/// A material's base colour: a constant spectrum or a texture (with the factor baked in).
+#[derive(Clone, Debug)]
+pub enum BaseColour {
+    /// The same reflectance everywhere.
+    Constant(RgbSpectrum),
+    /// A texture looked up at the surface's texture coordinates.
+    Texture(Arc<Texture>),
+}
+
+/// A surface's material: glTF metallic-roughness with transmission, IOR and emission.
+#[derive(Clone, Debug)]
+pub struct Material {
+    /// The material's name, for messages.
+    pub name: String,
+    /// Base colour (reflectance, or the conductor's normal-incidence reflectance).
+    pub base_colour: BaseColour,
+    /// glTF `metallicFactor`.
+    pub metallic: f32,
+    /// glTF `roughnessFactor` (perceptual; alpha = roughness^2).
+    pub roughness: f32,
+    /// glTF `metallicRoughnessTexture` (blue: metallic, green: roughness), scaling the factors.
+    pub metallic_roughness: Option<Arc<DataTexture>>,
+    /// glTF `normalTexture`.
+    pub normal_map: Option<NormalMap>,
+    /// The specular layer over a non-metal's base (glTF's dielectric BRDF); `None` for a pure
+    /// Lambertian base (`KHR_materials_specular` with a factor of 0).
+    pub specular: Option<Specular>,
+    /// `KHR_materials_transmission` factor.
+    pub transmission: f32,
+    /// Index of refraction against wavelength: `KHR_materials_ior` (1.5 when absent), with
+    /// `KHR_materials_dispersion` or a law from the `caustic` extras.
+    pub ior: Dispersion,
+    /// Emitted radiance shape (times D65) in W / (m^2 sr), or `None`.
+    pub emission: Option<RgbSpectrum>,
+    /// Whether emission leaves both faces (meshes) or only the front (area lights).
+    pub emits_both_sides: bool,
+    /// Transmission through a thin wall (an open mesh: a window pane modelled as a plane) rather
+    /// than into a solid: glTF's reading of transmission without a volume.
+    pub thin: bool,
+}
+
+/// A non-metal's specular layer as the file gives it: `KHR_materials_specular` over the index.
+#[derive(Clone, Debug, PartialEq)]
+pub struct Specular {
+    /// Normal-incidence reflectance at its colour's brightest: the index's, times the specular
+    /// factor and the colour's largest component (Blender folds a Specular IOR Level above 0.5
+    /// into the colour).
+    pub f0: f32,
+    /// The colour's hue (its largest component 1), tinting `f0` but not grazing reflection.
+    pub tint: RgbSpectrum,
+}
+
+impl Specular {
+    /// The layer of a material of index `ior` with `KHR_materials_specular`'s factor and colour;
+    /// `None` when it reflects nothing (a factor of 0: a pure Lambertian base).
+    pub fn new(ior: f32, factor: f32, colour: Vec3) -> Option<Self> {
+        let scale = colour.max_element();
+        let f0 = (f0_of_eta(ior) * factor * scale).min(0.99);
+        (f0 > 0.0).then(|| Specular { f0, tint: RgbSpectrum::reflectance(colour / scale) })
+    }
+
+    /// The coat at the wavelengths `lambda` with GGX `alpha` (0: smooth).
+    fn coat(&self, lambda: &Wavelengths, alpha: f32) -> Coat {
+        Coat::new(self.tint.eval_lanes(lambda.nm) * self.f0, eta_of_f0(self.f0), alpha)
+    }
+}
+
+impl Material {
+    /// A grey Lambertian material, for meshes without one.
+    pub fn default_grey() -> Self {
+        Material {
+            name: "default".into(),
+            base_colour: BaseColour::Constant(RgbSpectrum::constant(0.8)),
+            metallic: 0.0,
+            roughness: 1.0,
+            metallic_roughness: None,
+            normal_map: None,
+            specular: None,
+            transmission: 0.0,
+            ior: Dispersion::Constant(1.5),
+            emission: None,
+            emits_both_sides: true,
+            thin: false,
+        }
+    }
+
+    /// The base colour's reflectance (times the vertex colour) at a surface point and the
+    /// wavelengths `lambda`.
+    pub fn reflectance(&self, inputs: &SurfaceInputs, lambda: &Wavelengths) -> SampledSpectrum {
+        let base = match &self.base_colour {
+            BaseColour::Constant(spectrum) => spectrum.eval_lanes(lambda.nm),
+            BaseColour::Texture(texture) => texture.eval(&inputs.uv, lambda.nm),
+        };
+        match &inputs.colour {
+            Some(colour) => base * colour.eval(lambda.nm),
+            None => base,
+        }
+    }
+
+    /// Metallic and roughness at a surface point: the factors times the texture's blue and green.
+    fn metallic_roughness(&self, inputs: &SurfaceInputs) -> (f32, f32) {
+        match &self.metallic_roughness {
+            Some(texture) => {
+                let texel = texture.eval(&inputs.uv);
+                (self.metallic * texel.z, self.roughness * texel.y)
+            }
+            None => (self.metallic, self.roughness),
+        }
+    }
+
+    /// The shading frame at a surface point: the interpolated normal, bent by the normal map.
+    pub fn shading_frame(&self, inputs: &SurfaceInputs, frame: ShadingFrame) -> ShadingFrame {
+        match &self.normal_map {
+            Some(map) => map.apply(inputs, frame),
+            None => frame,
+        }
+    }
+
+    /// The emitted spectral radiance at `lambda` leaving toward `wo` from a face of normal `ng`.
+    pub fn emitted(&self, lambda: &Wavelengths, ng: Vec3, wo: Vec3) -> SampledSpectrum {
+        match &self.emission {
+            Some(spectrum) if self.emits_both_sides || ng.dot(wo) > 0.0 => {
+                spectrum.eval_lanes(lambda.nm) * lambda.d65
+            }
+            _ => Vec4::ZERO,
+        }
+    }
+
+    /// Whether it refracts each wavelength its own way (a transmissive material whose index
+    /// depends on wavelength).
+    pub fn is_dispersive(&self) -> bool {
+        self.transmission > 0.0 && self.ior.is_dispersive()
+    }
+
+    /// Whether `bsdf`, resolved from this material, sends each wavelength its own way: a path
+    /// through it can carry only its hero wavelength.
+    pub fn separates_wavelengths(&self, bsdf: &Bsdf) -> bool {
+        self.ior.is_dispersive() && matches!(bsdf, Bsdf::Dielectric { .. } | Bsdf::ThinDielectric { .. })
+    }
+
+    /// Whether light passes through unchanged (a thin fully transmissive wall of index 1, as area
+    /// lights are): such surfaces cast no shadow.
+    pub fn is_invisible(&self) -> bool {
+        self.thin && self.transmission >= 1.0 && self.ior == Dispersion::Constant(1.0)
+    }
+
+    /// The BSDF at a surface point, seen from `wo` at shading normal `n` (the material's
+    /// [`Material::shading_frame`]), and the wavelengths `lambda`, with `u_lobe` a uniform number
+    /// that picks a lobe where the material mixes several.
+    pub fn bsdf(&self, inputs: &SurfaceInputs, n: Vec3, wo: Vec3, lambda: &Wavelengths, u_lobe: f32) -> Bsdf {
+        if u_lobe < self.transmission {
+            let ior = self.ior.index(lambda.hero());
+            return if self.thin { Bsdf::ThinDielectric { ior } } else { Bsdf::Dielectric { ior } };
+        }
+        let reflectance = self.reflectance(inputs, lambda);
+        let (metallic, roughness) = self.metallic_roughness(inputs);
+        let u_lobe = (u_lobe - self.transmission) / (1.0 - self.transmission);
+        let alpha = roughness * roughness;
+        if u_lobe < metallic {
+            if roughness < SMOOTH_ROUGHNESS {
+                return Bsdf::Conductor { f0: reflectance };
+            }
+            return Bsdf::RoughConductor { f0: reflectance, alpha };
+        }
+        if self.emission.is_some() && reflectance == Vec4::ZERO {
+            return Bsdf::Black;
+        }
+        let Some(specular) = &self.specular else {
+            return Bsdf::Diffuse { albedo: reflectance };
+        };
+        let u_lobe = (u_lobe - metallic) / (1.0 - metallic);
+        let smooth = roughness < SMOOTH_ROUGHNESS;
+        let plastic =
+            Plastic { base: reflectance, coat: specular.coat(lambda, if smooth { 0.0 } else { alpha }) };
+        if smooth {
+            return plastic::choose_smooth(plastic, n, wo, u_lobe);
+        }
+        Bsdf::Plastic(plastic)
+    }
+}
