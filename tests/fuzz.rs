@@ -98,7 +98,7 @@ fn textured_seed() -> Value {
         "pbrMetallicRoughness": {"baseColorTexture": {"index": 0, "texCoord": 1,
             "extensions": {"KHR_texture_transform": {"offset": [0.5, 0.0], "rotation": 0.3, "scale": [2.0, 2.0]}}},
             "metallicRoughnessTexture": {"index": 1}},
-        "normalTexture": {"index": 2, "scale": 0.5},
+        "normalTexture": {"index": 2, "scale": 0.5}, "alphaMode": "MASK", "alphaCutoff": 0.3,
         "extensions": {"KHR_materials_specular": {"specularFactor": 0.7}}}));
     gltf.mesh_with_uvs("Ground", &quad, &uvs, material);
     gltf.attribute("TEXCOORD_1", &uvs.concat(), 2, "VEC2");

@@ -65,7 +65,7 @@ fn a_black_principled_sphere_shows_its_specular_layer() {
 fn unrendered_features_are_named() {
     let dir = tempfile::tempdir().unwrap();
     let mut gltf = GltfBuilder::default();
-    let paint = gltf.material(json!({"name": "Car paint", "alphaMode": "BLEND",
+    let paint = gltf.material(json!({"name": "Car paint",
         "extensions": {"KHR_materials_iridescence": {"iridescenceFactor": 1.0}}}));
     gltf.sphere("Body", [0.0, 0.0, 0.0], 1.0, 8, paint);
     gltf.camera([0.0, 0.0, 4.0], [0.0, 0.0, -1.0], 0.5);
@@ -74,10 +74,7 @@ fn unrendered_features_are_named() {
     let output = run_caustic(&["info", path.to_str().unwrap()]);
     let stderr = String::from_utf8_lossy(&output.stderr);
     assert!(output.status.success(), "{stderr}");
-    for expected in [
-        "material 'Car paint': KHR_materials_iridescence is not rendered",
-        "material 'Car paint': alpha mode Blend is not rendered (the surface is opaque)",
-    ] {
+    for expected in ["material 'Car paint': KHR_materials_iridescence is not rendered"] {
         assert!(stderr.contains(expected), "no '{expected}' in:\n{stderr}");
     }
 }
@@ -270,4 +267,67 @@ fn texture_transform_moves_the_texture() {
     assert!(
         moved.luminance(left.0, left.1, 14, 18) < 0.01 && moved.luminance(right.0, right.1, 14, 18) > 0.9
     );
+}
+
+/// A black leaf at height 1 over the ground of `GROUND` (the same square), whose base colour
+/// texture `texture` cuts it as `alpha_mode` says, under a sun straight above; the ground seen
+/// from `eye` (below the leaf or above it).
+fn leaf_over_ground(dir: &Path, alpha: Value, texture: &str, eye: f32) -> Image {
+    let mut gltf = GltfBuilder::default();
+    gltf.texture(texture);
+    let ground = gltf.material(lambert(json!({})));
+    gltf.mesh_with_uvs("Ground", &GROUND, &ground_uvs(), ground);
+    let mut leaf = json!({"pbrMetallicRoughness": {"baseColorFactor": [0.0, 0.0, 0.0, 1.0], "metallicFactor": 0.0,
+        "baseColorTexture": {"index": 0}}, "extensions": {"KHR_materials_specular": {"specularFactor": 0.0}}});
+    for (key, value) in alpha.as_object().unwrap() {
+        leaf[key] = value.clone();
+    }
+    let leaf = gltf.material(leaf);
+    let raised = GROUND.map(|t| t.map(|p| [p[0], 1.0, p[2]]));
+    gltf.mesh_with_uvs("Leaf", &raised, &ground_uvs(), leaf);
+    gltf.light(json!({"type": "directional", "intensity": 683.0}), [0.0, 5.0, 0.0], [0.0, -1.0, 0.0]);
+    gltf.camera([0.0, eye, 0.0], [0.0, -1.0, 0.0], if eye < 1.0 { 1.5 } else { 0.5 });
+    gltf.scene_extras(json!({"resolution": [32, 32]}));
+    let path = gltf.write(dir, "leaf");
+    render(&settings(&path, dir, 16), 2)
+}
+
+/// A leaf clipped by its texture's alpha (MASK) casts a shadow of its shape, for light samples
+/// and photons alike, and is seen through where it is cut away: its left half (u < 0.5) is
+/// there, its right half is not.
+#[test]
+fn an_alpha_masked_leaf_casts_the_shadow_of_its_shape() {
+    let dir = tempfile::tempdir().unwrap();
+    image::RgbaImage::from_fn(4, 1, |x, _| image::Rgba([0, 0, 0, if x < 2 { 255 } else { 0 }]))
+        .save(dir.path().join("half.png"))
+        .unwrap();
+    let mask = json!({"alphaMode": "MASK", "alphaCutoff": 0.5});
+    // From 0.5 above the ground, under the leaf: the left half of the ground is in its shadow.
+    let below = leaf_over_ground(dir.path(), mask.clone(), "half.png", 0.5);
+    let (shadow, lit) = (below.luminance(2, 12, 10, 22), below.luminance(20, 30, 10, 22));
+    // The lit ground: albedo 0.8 / pi under 1 W/m^2.
+    assert!((lit / (0.8 / std::f64::consts::PI) - 1.0).abs() < 0.03, "lit {lit}");
+    assert!(shadow < 1e-3 * lit, "shadow {shadow}, lit {lit}");
+    // From above: the black leaf on the left, the lit ground through the cut on the right.
+    let above = leaf_over_ground(dir.path(), mask, "half.png", 4.0);
+    let (leaf, hole) = (above.luminance(6, 10, 14, 18), above.luminance(22, 26, 14, 18));
+    assert!(leaf < 1e-3 && (hole / lit - 1.0).abs() < 0.03, "leaf {leaf}, hole {hole}, lit {lit}");
+}
+
+/// A leaf of alpha 0.25 (BLEND) lets three quarters of the sun through to the ground below it
+/// (2%), and is seen a quarter black from above.
+#[test]
+fn a_blended_leaf_lets_its_transparency_through() {
+    let dir = tempfile::tempdir().unwrap();
+    image::RgbaImage::from_pixel(2, 2, image::Rgba([0, 0, 0, 64]))
+        .save(dir.path().join("quarter.png"))
+        .unwrap();
+    let blend = json!({"alphaMode": "BLEND"});
+    let below = leaf_over_ground(dir.path(), blend.clone(), "quarter.png", 0.5).luminance(4, 28, 4, 28);
+    let open = 0.8 / std::f64::consts::PI;
+    let alpha = 64.0 / 255.0;
+    assert!((below / (open * (1.0 - alpha)) - 1.0).abs() < 0.02, "below {below} vs {}", open * (1.0 - alpha));
+    let above = leaf_over_ground(dir.path(), blend, "quarter.png", 4.0).luminance(8, 24, 8, 24);
+    let expected = open * (1.0 - alpha) * (1.0 - alpha);
+    assert!((above / expected - 1.0).abs() < 0.05, "above {above} vs {expected}");
 }

@@ -57,6 +57,61 @@ pub struct Material {
     /// Transmission through a thin wall (an open mesh: a window pane modelled as a plane) rather
     /// than into a solid: glTF's reading of transmission without a volume.
     pub thin: bool,
+    /// How the base colour's alpha cuts the surface (glTF `alphaMode`).
+    pub alpha: Alpha,
+}
+
+/// glTF `alphaMode` with the alpha it reads: the base colour factor's, times its texture's.
+#[derive(Clone, Debug)]
+pub enum Alpha {
+    /// Alpha is ignored.
+    Opaque,
+    /// The surface is there where alpha reaches the cutoff, and not elsewhere.
+    Mask {
+        /// `alphaCutoff`.
+        cutoff: f32,
+        /// The factor's alpha and the texture whose alpha channel multiplies it.
+        coverage: Coverage,
+    },
+    /// The surface is there with probability alpha (stochastic transparency).
+    Blend {
+        /// The factor's alpha and the texture whose alpha channel multiplies it.
+        coverage: Coverage,
+    },
+}
+
+/// Where alpha comes from: the base colour factor's alpha times its texture's alpha channel.
+#[derive(Clone, Debug)]
+pub struct Coverage {
+    /// `baseColorFactor`'s alpha.
+    pub factor: f32,
+    /// The base colour texture, read for its alpha channel.
+    pub texture: Option<Arc<DataTexture>>,
+}
+
+impl Coverage {
+    fn at(&self, inputs: &SurfaceInputs) -> f32 {
+        match &self.texture {
+            Some(texture) => self.factor * texture.eval(&inputs.uv).w,
+            None => self.factor,
+        }
+    }
+}
+
+impl Alpha {
+    /// The probability that the surface is there at a surface point (1 for opaque surfaces).
+    pub fn opacity(&self, inputs: &SurfaceInputs) -> f32 {
+        match self {
+            Alpha::Opaque => 1.0,
+            Alpha::Mask { cutoff, coverage } => (coverage.at(inputs) >= *cutoff) as u8 as f32,
+            Alpha::Blend { coverage } => coverage.at(inputs).clamp(0.0, 1.0),
+        }
+    }
+
+    /// Whether alpha can make the surface transparent anywhere.
+    pub fn cuts(&self) -> bool {
+        !matches!(self, Alpha::Opaque)
+    }
 }
 
 /// A non-metal's specular layer as the file gives it: `KHR_materials_specular` over the index.
@@ -101,6 +156,7 @@ impl Material {
             emission: None,
             emits_both_sides: true,
             thin: false,
+            alpha: Alpha::Opaque,
         }
     }
 
@@ -168,6 +224,11 @@ impl Material {
     /// [`Material::shading_frame`]), and the wavelengths `lambda`, with `u_lobe` a uniform number
     /// that picks a lobe where the material mixes several.
     pub fn bsdf(&self, inputs: &SurfaceInputs, n: Vec3, wo: Vec3, lambda: &Wavelengths, u_lobe: f32) -> Bsdf {
+        let opacity = self.alpha.opacity(inputs);
+        if u_lobe >= opacity {
+            return Bsdf::PassThrough;
+        }
+        let u_lobe = u_lobe / opacity;
         if u_lobe < self.transmission {
             let ior = self.ior.index(lambda.hero());
             return if self.thin { Bsdf::ThinDielectric { ior } } else { Bsdf::Dielectric { ior } };

@@ -27,7 +27,7 @@ use crate::spectrum::SampledSpectrum;
 pub use dielectric::fresnel_dielectric;
 pub use inputs::{NormalMap, SurfaceInputs, VertexColour};
 pub use layer_albedo::{eta_of_f0, f0_of_eta};
-pub use material::{BaseColour, Material, Specular, SMOOTH_ROUGHNESS};
+pub use material::{Alpha, BaseColour, Coverage, Material, Specular, SMOOTH_ROUGHNESS};
 pub use plastic::{Coat, Plastic};
 pub use texture::{DataTexture, Rgba, Texture, TextureMap, Wrap, UV_SETS};
 
@@ -72,6 +72,8 @@ pub enum Bsdf {
     },
     /// Absorbs everything (a light's own surface).
     Black,
+    /// Not there: light goes on unchanged (where alpha cuts the surface away).
+    PassThrough,
 }
 
 /// What a path carries: radiance (camera paths) or importance (photons). Only refraction cares.
@@ -105,6 +107,7 @@ impl Bsdf {
                 | Bsdf::Conductor { .. }
                 | Bsdf::Dielectric { .. }
                 | Bsdf::ThinDielectric { .. }
+                | Bsdf::PassThrough
         )
     }
 
@@ -166,6 +169,7 @@ impl Bsdf {
             Bsdf::Dielectric { ior } => dielectric::sample(ior, frame, wo, u_lobe, mode),
             Bsdf::ThinDielectric { ior } => dielectric::sample_thin(ior, frame, wo, u_lobe),
             Bsdf::Black => None,
+            Bsdf::PassThrough => Some(BsdfSample { wi: -wo, weight: Vec4::ONE, pdf: 0.0, is_delta: true }),
         }
     }
 }

@@ -8,7 +8,9 @@ use glam::Vec3;
 
 use super::extras::{self, MaterialExtras};
 use super::gltf_textures::{decode, info_map, normal_map};
-use crate::materials::{BaseColour, DataTexture, Material, NormalMap, Specular, Texture};
+use gltf::material::AlphaMode;
+
+use crate::materials::{Alpha, BaseColour, Coverage, DataTexture, Material, NormalMap, Specular, Texture};
 use crate::spectrum::{Dispersion, RgbSpectrum};
 
 /// A glTF material as a Caustic material.
@@ -27,6 +29,18 @@ pub fn material(m: &gltf::Material, images: &[gltf::image::Data]) -> Result<Mate
     let metallic_roughness = match pbr.metallic_roughness_texture().and_then(|i| Some((info_map(&i)?, i))) {
         Some((map, info)) => Some(Arc::new(DataTexture::new(&image(info.texture())?, map))),
         None => None,
+    };
+    let coverage = || -> Result<Coverage, String> {
+        let texture = match pbr.base_color_texture().and_then(|i| Some((info_map(&i)?, i))) {
+            Some((map, info)) => Some(Arc::new(DataTexture::new(&image(info.texture())?, map))),
+            None => None,
+        };
+        Ok(Coverage { factor: pbr.base_color_factor()[3].clamp(0.0, 1.0), texture })
+    };
+    let alpha = match m.alpha_mode() {
+        AlphaMode::Opaque => Alpha::Opaque,
+        AlphaMode::Mask => Alpha::Mask { cutoff: m.alpha_cutoff().unwrap_or(0.5), coverage: coverage()? },
+        AlphaMode::Blend => Alpha::Blend { coverage: coverage()? },
     };
     let normal_map = match m.normal_texture().and_then(|n| Some((normal_map(&n)?, n))) {
         Some((map, normal)) => Some(NormalMap {
@@ -49,6 +63,7 @@ pub fn material(m: &gltf::Material, images: &[gltf::image::Data]) -> Result<Mate
         base_colour,
         metallic_roughness,
         normal_map,
+        alpha,
         metallic: pbr.metallic_factor().clamp(0.0, 1.0),
         roughness: pbr.roughness_factor().clamp(0.0, 1.0),
         transmission: m.transmission().map_or(0.0, |t| t.transmission_factor()).clamp(0.0, 1.0),

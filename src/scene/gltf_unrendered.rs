@@ -4,8 +4,6 @@
 //!
 //! Occlusion textures are not light transport and are ignored without a warning.
 
-use gltf::material::AlphaMode;
-
 use super::gltf_textures::{info_set, normal_set};
 use crate::materials::UV_SETS;
 
@@ -29,10 +27,6 @@ pub fn material_warnings(m: &gltf::Material) -> Vec<String> {
         .map(|k| format!("{k} is not rendered"))
         .collect();
     unrendered.extend(unrendered_textures(m));
-    match m.alpha_mode() {
-        AlphaMode::Opaque => {}
-        mode => unrendered.push(format!("alpha mode {mode:?} is not rendered (the surface is opaque)")),
-    }
     let rough = m.pbr_metallic_roughness().roughness_factor() > 0.0;
     if rough && m.transmission().is_some_and(|t| t.transmission_factor() > 0.0) {
         unrendered.push("rough transmission is not rendered (it renders as smooth glass)".into());

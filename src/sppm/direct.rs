@@ -5,8 +5,9 @@
 use glam::Vec3;
 
 use super::renderer::{PassStats, Renderer, VisiblePoint};
+use super::see_through;
 use crate::geometry::offset_origin;
-use crate::materials::{ShadingFrame, Transport};
+use crate::materials::{BsdfSample, ShadingFrame, Transport};
 use crate::sampling::PixelSampler;
 use crate::scene::NOT_A_LIGHT;
 use crate::spectrum::{SampledSpectrum, Wavelengths};
@@ -89,7 +90,14 @@ impl DirectLight<'_> {
         let origin = offset_origin(point.p, ng, sample.wi, point.scale);
         let t_max = if sample.distance.is_finite() { sample.distance * (1.0 - 1e-4) } else { f32::INFINITY };
         let ray = ShadowRay { origin, direction: sample.wi, t_max };
-        if renderer.accel.occluded(origin, sample.wi, t_max) {
+        let through = if renderer.has_cut_away_surfaces {
+            see_through::transmittance(renderer, origin, sample.wi, t_max)
+        } else if renderer.accel.occluded(origin, sample.wi, t_max) {
+            0.0
+        } else {
+            1.0
+        };
+        if through <= 0.0 {
             return DirectTerm::ZERO;
         }
         let weight = if sample.pdf > 0.0 {
@@ -97,7 +105,7 @@ impl DirectLight<'_> {
         } else {
             1.0
         };
-        let value = f * n.dot(sample.wi).abs() * sample.radiance_over_pdf / p_choice * weight;
+        let value = f * n.dot(sample.wi).abs() * sample.radiance_over_pdf / p_choice * weight * through;
         DirectTerm { value, ray: Some(ray) }
     }
 
@@ -119,8 +127,19 @@ impl DirectLight<'_> {
         let light_pdf = |index: usize, q: Vec3| {
             renderer.light_choice.probability(index) * scene.lights[index].pdf_incident(point.p, sample.wi, q)
         };
-        let hit = renderer.accel.intersect(origin, sample.wi, f32::INFINITY);
-        let ray = Some(ShadowRay { origin, direction: sample.wi, t_max: hit.map_or(f32::INFINITY, |h| h.t) });
+        let (hit, through) = if renderer.has_cut_away_surfaces {
+            see_through::first_hit(renderer, origin, sample.wi)
+        } else {
+            (renderer.accel.intersect(origin, sample.wi, f32::INFINITY), 1.0)
+        };
+        let sample = BsdfSample { weight: sample.weight * through, ..sample };
+        // From the origin to the surface hit, across any cut-away surfaces before it.
+        let t_max = match hit {
+            Some(h) if renderer.has_cut_away_surfaces => (h.p - origin).dot(sample.wi).max(h.t),
+            Some(h) => h.t,
+            None => f32::INFINITY,
+        };
+        let ray = Some(ShadowRay { origin, direction: sample.wi, t_max });
         let Some(hit) = hit else {
             let value = scene
                 .distant_lights

@@ -11,6 +11,7 @@ mod pass;
 mod photons;
 pub mod radius;
 mod renderer;
+mod see_through;
 mod shared;
 mod visible;
 

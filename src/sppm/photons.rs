@@ -12,7 +12,7 @@ use rayon::prelude::*;
 
 use super::renderer::{PassSamples, PassStats, Renderer, MAX_DEPTH};
 use crate::geometry::offset_origin;
-use crate::materials::Transport;
+use crate::materials::{Bsdf, Transport};
 use crate::sampling::{stream, Sampler, Stream};
 use crate::spectrum::{hero_only, SampledSpectrum, LANES};
 
@@ -44,6 +44,9 @@ pub struct PhotonState {
     pub hero_only: bool,
     /// Segments traced before this one.
     pub depth: u32,
+    /// It has scattered off a surface (not only passed where alpha cuts one away): from here on
+    /// it is not direct light, and is stored.
+    pub scattered: bool,
     /// The path's random stream, where this segment leaves it.
     pub rng: Sampler,
 }
@@ -71,6 +74,7 @@ pub fn start_photon(renderer: &Renderer, pass: &PassSamples, k: u64) -> Option<(
         flux,
         hero_only: false,
         depth: 0,
+        scattered: false,
         rng,
     };
     Some((state, index))
@@ -110,7 +114,7 @@ pub fn continue_photon(
         let rng = &mut state.rng;
         let frame = material.shading_frame(&surface.inputs, surface.frame);
         let bsdf = material.bsdf(&surface.inputs, frame.n, wo, &pass.wavelengths, rng.next_1d());
-        if !bsdf.is_delta() && state.depth > 0 {
+        if !bsdf.is_delta() && state.scattered {
             let ng = if surface.frame.ng.dot(wo) < 0.0 { -surface.frame.ng } else { surface.frame.ng };
             out.push(Photon { p: surface.p, wi: wo, ng, flux: state.flux, hero_only: state.hero_only });
             stats.photons_stored += 1;
@@ -136,6 +140,7 @@ pub fn continue_photon(
         state.origin = offset_origin(surface.p, surface.frame.ng, sample.wi, surface.scale);
         state.direction = sample.wi;
         state.depth += 1;
+        state.scattered |= bsdf != Bsdf::PassThrough;
     }
     stats
 }

@@ -176,19 +176,32 @@ pub struct Renderer<'a> {
     pub(super) accel: &'a Accel,
     pub(super) light_choice: Distribution1D,
     pub(super) settings: SppmSettings,
+    /// Some material's alpha cuts its surface away somewhere: shadow rays look through.
+    pub(super) has_cut_away_surfaces: bool,
+}
+
+/// Whether some material's alpha can cut its surface away.
+fn has_cut_away_surfaces(scene: &Scene) -> bool {
+    scene.materials.iter().any(|m| m.alpha.cuts())
 }
 
 impl<'a> Renderer<'a> {
     /// A renderer for `scene`; lights are chosen in proportion to their power.
     pub fn new(scene: &'a Scene, accel: &'a Accel, settings: SppmSettings) -> Self {
         let light_choice = Distribution1D::new(scene.lights.iter().map(Light::power));
-        Renderer { scene, accel, light_choice, settings }
+        Renderer { scene, accel, light_choice, settings, has_cut_away_surfaces: has_cut_away_surfaces(scene) }
     }
 
     /// A renderer for `scene` that chooses lights as `other` does (frames that share photon
     /// paths must choose their lights alike).
     pub fn choosing_lights_as(other: &Renderer, scene: &'a Scene, accel: &'a Accel) -> Self {
-        Renderer { scene, accel, light_choice: other.light_choice.clone(), settings: other.settings.clone() }
+        Renderer {
+            scene,
+            accel,
+            light_choice: other.light_choice.clone(),
+            settings: other.settings.clone(),
+            has_cut_away_surfaces: has_cut_away_surfaces(scene),
+        }
     }
 
     /// The settings.
