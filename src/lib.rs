@@ -6,7 +6,7 @@
 //! glTF + extras --scene--> Description --pose--> Prepared (fixed part, once per frame range)
 //!                                                    | pose(time) per pass when things move
 //!                                                    v
-//!        spectrum, sampling, geometry,          Scene --accel--> BVHs (fixed + moving)
+//!        spectrum, sampling, geometry, texture, Scene --accel--> BVHs (fixed + moving)
 //!        materials, lights, camera (leaves)          |
 //!                                                    v
 //!                 sppm::Renderer::run_pass(i) -> per-pixel estimates at lambda_i, time_i
@@ -41,3 +41,4 @@ pub mod sampling;
 pub mod scene;
 pub mod spectrum;
 pub mod sppm;
+pub mod texture;

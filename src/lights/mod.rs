@@ -16,12 +16,14 @@ pub use world::World;
 
 use glam::{Vec2, Vec3, Vec3A};
 use std::f32::consts::PI;
+use std::sync::Arc;
 
 use crate::geometry::{corners_scale, offset_origin, one_minus_cos_between, Cone};
 use crate::sampling::{
     basis, square_to_cone, square_to_cosine_hemisphere, square_to_disc, square_to_sphere, square_to_triangle,
 };
 use crate::spectrum::{RgbSpectrum, SampledSpectrum, Wavelengths};
+use crate::texture::{Texture, UV_SETS};
 
 /// The scene's bounding sphere, where distant lights start their photons.
 #[derive(Clone, Copy, Debug, Default)]
@@ -72,13 +74,54 @@ pub enum Light {
     World(World),
 }
 
+/// What an emitting triangle emits: one radiance, or an emissive texture's across it.
+#[derive(Clone, Debug)]
+pub enum Emission {
+    /// The same radiance everywhere, W / (m^2 sr) (times D65).
+    Uniform(RgbSpectrum),
+    /// A texture of radiance spectra, read at the texture coordinates of the triangle's corners.
+    Textured {
+        /// The texture, factor and strength baked in.
+        texture: Arc<Texture>,
+        /// Each corner's texture coordinates, one pair per set.
+        uvs: [[Vec2; UV_SETS]; 3],
+    },
+}
+
+impl Emission {
+    /// The radiance at barycentric coordinates `b` and the wavelengths `lambda`.
+    fn at(&self, b: Vec2, lambda: &Wavelengths) -> SampledSpectrum {
+        match self {
+            Emission::Uniform(radiance) => spectral(radiance, lambda),
+            Emission::Textured { texture, uvs } => texture.eval(&corner_mix(uvs, b), lambda.nm) * lambda.d65,
+        }
+    }
+
+    /// The mean luminance over the triangle (a texture's from 64 stratified points), for choosing
+    /// lights by power.
+    fn mean_luminance(&self) -> f64 {
+        match self {
+            Emission::Uniform(radiance) => radiance.luminance(),
+            Emission::Textured { texture, uvs } => {
+                let points = (0..64).map(|i| Vec2::new((i % 8) as f32 + 0.5, (i / 8) as f32 + 0.5) / 8.0);
+                points.map(|u| texture.luminance(&corner_mix(uvs, square_to_triangle(u)))).sum::<f64>() / 64.0
+            }
+        }
+    }
+}
+
+/// The texture coordinates at barycentric coordinates `b` of a triangle with corners' `uvs`.
+fn corner_mix(uvs: &[[Vec2; UV_SETS]; 3], b: Vec2) -> [Vec2; UV_SETS] {
+    std::array::from_fn(|set| uvs[0][set] * (1.0 - b.x - b.y) + uvs[1][set] * b.x + uvs[2][set] * b.y)
+}
+
 /// An emitting triangle, with what sampling it needs computed once.
 #[derive(Clone, Debug)]
 pub struct EmittingTriangle {
     /// Its corners.
     corners: [Vec3; 3],
     /// Emitted radiance, W / (m^2 sr).
-    radiance: RgbSpectrum,
+    emission: Emission,
     /// Whether both faces emit (meshes) or only the front (area lights).
     both_sides: bool,
     /// Its unit normal (corners counter-clockwise), zero when degenerate.
@@ -90,13 +133,13 @@ pub struct EmittingTriangle {
 }
 
 impl EmittingTriangle {
-    /// The triangle `corners` emitting `radiance` (W / (m^2 sr)) from its front, or from both
+    /// The triangle `corners` emitting `emission` (W / (m^2 sr)) from its front, or from both
     /// faces if `both_sides`.
-    pub fn new(corners: [Vec3; 3], radiance: RgbSpectrum, both_sides: bool) -> Self {
+    pub fn new(corners: [Vec3; 3], emission: Emission, both_sides: bool) -> Self {
         let cross = (corners[1] - corners[0]).cross(corners[2] - corners[0]);
         EmittingTriangle {
             corners,
-            radiance,
+            emission,
             both_sides,
             normal: cross.normalize_or_zero(),
             area: 0.5 * cross.length(),
@@ -113,11 +156,11 @@ impl EmittingTriangle {
         }
     }
 
-    /// A uniform point on it.
-    fn point(&self, u: Vec2) -> Vec3 {
+    /// A uniform point on it, and its barycentric coordinates.
+    fn point(&self, u: Vec2) -> (Vec3, Vec2) {
         let b = square_to_triangle(u);
         let c = &self.corners;
-        c[0] * (1.0 - b.x - b.y) + c[1] * b.x + c[2] * b.y
+        (c[0] * (1.0 - b.x - b.y) + c[1] * b.x + c[2] * b.y, b)
     }
 }
 
@@ -177,7 +220,9 @@ impl Light {
                 irradiance.luminance() * f64::from(PI * sphere.radius * sphere.radius)
             }
             Light::Triangle(triangle) => {
-                f64::from(triangle.sides()) * triangle.radiance.luminance() * f64::from(PI * triangle.area)
+                f64::from(triangle.sides())
+                    * triangle.emission.mean_luminance()
+                    * f64::from(PI * triangle.area)
             }
             Light::World(world) => {
                 let r = f64::from(world.sphere.radius);
@@ -214,13 +259,13 @@ impl Light {
                 Some(LightSample { wi, distance: f32::INFINITY, radiance_over_pdf, pdf })
             }
             Light::Triangle(triangle) => {
-                let q = triangle.point(u);
+                let (q, b) = triangle.point(u);
                 let (wi, distance) = direction_and_distance(p, q)?;
                 let pdf = self.pdf_incident(p, wi, q);
                 if pdf <= 0.0 {
                     return None;
                 }
-                let radiance_over_pdf = spectral(&triangle.radiance, lambda) / pdf;
+                let radiance_over_pdf = triangle.emission.at(b, lambda) / pdf;
                 Some(LightSample { wi, distance, radiance_over_pdf, pdf })
             }
             Light::World(world) => {
@@ -311,14 +356,15 @@ impl Light {
                         u.x = 2.0 * u.x - 1.0;
                     }
                 }
-                let (t, b) = basis(n);
+                let (q, b) = triangle.point(u_position);
+                let (t, bitangent) = basis(n);
                 let local = square_to_cosine_hemisphere(u);
                 // Unit to rounding (an orthonormal basis, a unit local direction).
-                let direction = t * local.x + b * local.y + n * local.z;
+                let direction = t * local.x + bitangent * local.y + n * local.z;
                 EmittedPhoton {
-                    origin: offset_origin(triangle.point(u_position), n, direction, triangle.scale),
+                    origin: offset_origin(q, n, direction, triangle.scale),
                     direction,
-                    flux: spectral(&triangle.radiance, lambda) * PI * triangle.area * triangle.sides(),
+                    flux: triangle.emission.at(b, lambda) * PI * triangle.area * triangle.sides(),
                 }
             }
             Light::World(world) => {
@@ -354,8 +400,16 @@ mod tests {
         let s = 1.0;
         let c = [Vec3::new(-s, -s, 1.0), Vec3::new(s, -s, 1.0), Vec3::new(s, s, 1.0), Vec3::new(-s, s, 1.0)];
         let lights = [
-            Light::Triangle(EmittingTriangle::new([c[0], c[2], c[1]], RgbSpectrum::constant(1.0), false)),
-            Light::Triangle(EmittingTriangle::new([c[0], c[3], c[2]], RgbSpectrum::constant(1.0), false)),
+            Light::Triangle(EmittingTriangle::new(
+                [c[0], c[2], c[1]],
+                Emission::Uniform(RgbSpectrum::constant(1.0)),
+                false,
+            )),
+            Light::Triangle(EmittingTriangle::new(
+                [c[0], c[3], c[2]],
+                Emission::Uniform(RgbSpectrum::constant(1.0)),
+                false,
+            )),
         ];
         let n = 40000;
         let mut irradiance = 0.0;

@@ -6,9 +6,9 @@ use std::sync::Arc;
 
 use glam::{Vec2, Vec3, Vec4};
 
-use super::texture::{DataTexture, UV_SETS};
 use super::ShadingFrame;
 use crate::spectrum::RgbSpectrum;
+use crate::texture::{DataTexture, UV_SETS};
 
 /// The vertex colour at a point: the triangle's three corner spectra and the point's barycentric
 /// weights (spectra are interpolated by value at each wavelength, as texels are).

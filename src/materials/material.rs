@@ -11,9 +11,9 @@ use glam::{Vec3, Vec4};
 use super::inputs::{NormalMap, SurfaceInputs};
 use super::layer_albedo::{eta_of_f0, f0_of_eta};
 use super::plastic::{self, Coat, Plastic};
-use super::texture::{DataTexture, Texture};
 use super::{Bsdf, ShadingFrame};
 use crate::spectrum::{Dispersion, RgbSpectrum, SampledSpectrum, Wavelengths};
+use crate::texture::{DataTexture, Texture};
 
 /// Roughness below this is treated as perfectly smooth (a delta BSDF).
 pub const SMOOTH_ROUGHNESS: f32 = 0.02;
@@ -52,6 +52,9 @@ pub struct Material {
     pub ior: Dispersion,
     /// Emitted radiance shape (times D65) in W / (m^2 sr), or `None`.
     pub emission: Option<RgbSpectrum>,
+    /// The emissive texture with the emission's factor and strength baked in, which replaces
+    /// `emission` where it is read.
+    pub emission_texture: Option<Arc<Texture>>,
     /// Whether emission leaves both faces (meshes) or only the front (area lights).
     pub emits_both_sides: bool,
     /// Transmission through a thin wall (an open mesh: a window pane modelled as a plane) rather
@@ -154,6 +157,7 @@ impl Material {
             transmission: 0.0,
             ior: Dispersion::Constant(1.5),
             emission: None,
+            emission_texture: None,
             emits_both_sides: true,
             thin: false,
             alpha: Alpha::Opaque,
@@ -192,13 +196,20 @@ impl Material {
         }
     }
 
-    /// The emitted spectral radiance at `lambda` leaving toward `wo` from a face of normal `ng`.
-    pub fn emitted(&self, lambda: &Wavelengths, ng: Vec3, wo: Vec3) -> SampledSpectrum {
-        match &self.emission {
-            Some(spectrum) if self.emits_both_sides || ng.dot(wo) > 0.0 => {
-                spectrum.eval_lanes(lambda.nm) * lambda.d65
-            }
-            _ => Vec4::ZERO,
+    /// The emitted spectral radiance at a surface point and `lambda` leaving toward `wo` from a
+    /// face of normal `ng`.
+    pub fn emitted(
+        &self,
+        inputs: &SurfaceInputs,
+        lambda: &Wavelengths,
+        ng: Vec3,
+        wo: Vec3,
+    ) -> SampledSpectrum {
+        match (&self.emission, &self.emission_texture) {
+            (Some(_), _) if !self.emits_both_sides && ng.dot(wo) <= 0.0 => Vec4::ZERO,
+            (Some(_), Some(texture)) => texture.eval(&inputs.uv, lambda.nm) * lambda.d65,
+            (Some(spectrum), None) => spectrum.eval_lanes(lambda.nm) * lambda.d65,
+            (None, _) => Vec4::ZERO,
         }
     }
 
@@ -223,12 +234,18 @@ impl Material {
     /// The BSDF at a surface point, seen from `wo` at shading normal `n` (the material's
     /// [`Material::shading_frame`]), and the wavelengths `lambda`, with `u_lobe` a uniform number
     /// that picks a lobe where the material mixes several.
+    #[inline]
     pub fn bsdf(&self, inputs: &SurfaceInputs, n: Vec3, wo: Vec3, lambda: &Wavelengths, u_lobe: f32) -> Bsdf {
-        let opacity = self.alpha.opacity(inputs);
-        if u_lobe >= opacity {
-            return Bsdf::PassThrough;
-        }
-        let u_lobe = u_lobe / opacity;
+        let u_lobe = match self.alpha.cuts() {
+            false => u_lobe,
+            true => {
+                let opacity = self.alpha.opacity(inputs);
+                if u_lobe >= opacity {
+                    return Bsdf::PassThrough;
+                }
+                u_lobe / opacity
+            }
+        };
         if u_lobe < self.transmission {
             let ior = self.ior.index(lambda.hero());
             return if self.thin { Bsdf::ThinDielectric { ior } } else { Bsdf::Dielectric { ior } };

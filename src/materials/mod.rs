@@ -1,7 +1,7 @@
 //! Materials (what the glTF file says) and BSDFs (a material resolved at a path's wavelengths).
 //!
 //! A [`Material`] (`material.rs`) holds the glTF metallic-roughness parameters with spectra and
-//! textures (`texture.rs`); [`Material::bsdf`] resolves it at a surface point's inputs
+//! textures ([`crate::texture`]); [`Material::bsdf`] resolves it at a surface point's inputs
 //! (`inputs.rs`: texture coordinates, vertex colour, tangent) and the pass's wavelengths into a
 //! closed [`Bsdf`] with a value per wavelength (directions and indices follow the hero
 //! wavelength). One lobe or layer per file: `diffuse.rs`, `conductor.rs`, `dielectric.rs`,
@@ -18,7 +18,6 @@ mod layer_albedo;
 mod material;
 mod microfacet;
 mod plastic;
-mod texture;
 
 use glam::{Vec2, Vec3, Vec4};
 
@@ -29,7 +28,6 @@ pub use inputs::{NormalMap, SurfaceInputs, VertexColour};
 pub use layer_albedo::{eta_of_f0, f0_of_eta};
 pub use material::{Alpha, BaseColour, Coverage, Material, Specular, SMOOTH_ROUGHNESS};
 pub use plastic::{Coat, Plastic};
-pub use texture::{DataTexture, Rgba, Texture, TextureMap, Wrap, UV_SETS};
 
 /// A BSDF at a path's wavelengths: reflectances per wavelength, indices at the hero's.
 #[derive(Clone, Copy, Debug, PartialEq)]

@@ -32,14 +32,12 @@ pub struct Coat {
     pub eta: f32,
     /// GGX alpha; 0 for a smooth coat.
     pub alpha: f32,
-    /// The coat's albedo tables at this roughness and index.
-    pub albedo: LayerAlbedo,
 }
 
 impl Coat {
     /// A coat of normal-incidence reflectance `f0`, index `eta` and GGX `alpha`.
     pub fn new(f0: SampledSpectrum, eta: f32, alpha: f32) -> Self {
-        Coat { f0, eta, alpha, albedo: LayerAlbedo::new(alpha, eta) }
+        Coat { f0, eta, alpha }
     }
 
     /// The Fresnel term at microfacet cosine `cos_h`.
@@ -47,15 +45,32 @@ impl Coat {
         self.f0 + (Vec4::ONE - self.f0) * fresnel_remap(cos_h, self.eta)
     }
 
+    /// The coat's albedo tables at its roughness and index (looked up where they are read, so
+    /// that a BSDF stays small: visible points keep one per pixel).
+    fn tables(&self) -> LayerAlbedo {
+        LayerAlbedo::new(self.alpha, self.eta)
+    }
+
     /// The coat's directional albedo seen at cosine `mu`.
     pub fn albedo(&self, mu: f32) -> SampledSpectrum {
-        let e = self.albedo.at(mu);
-        self.f0 * e.x + (Vec4::ONE - self.f0) * e.y
+        self.mix(self.tables().at(mu))
     }
 
     /// The coat's cosine-weighted mean albedo.
     pub fn mean_albedo(&self) -> SampledSpectrum {
-        let e = self.albedo.means;
+        self.mix(self.tables().means)
+    }
+
+    /// The share of light the coat lets through to the base and back, from cosine `mu_i` to
+    /// `mu_o`: `(1 - E(wo)) (1 - E(wi)) / (1 - E_avg)`.
+    fn through(&self, mu_o: f32, mu_i: f32) -> SampledSpectrum {
+        let tables = self.tables();
+        let entering = (Vec4::ONE - self.mix(tables.means)).max(Vec4::splat(1e-4));
+        (Vec4::ONE - self.mix(tables.at(mu_o))) * (Vec4::ONE - self.mix(tables.at(mu_i))) / entering
+    }
+
+    /// `f0 E1 + (1 - f0) Es` for the pair `e = (E1, Es)`.
+    fn mix(&self, e: Vec2) -> SampledSpectrum {
         self.f0 * e.x + (Vec4::ONE - self.f0) * e.y
     }
 }
@@ -87,9 +102,7 @@ impl Plastic {
 
     /// The base's reflection for local `wo` and `wi` above the surface.
     fn base_value(&self, wo: Vec3, wi: Vec3) -> SampledSpectrum {
-        let through = (Vec4::ONE - self.coat.albedo(wo.z)) * (Vec4::ONE - self.coat.albedo(wi.z));
-        let entering = (Vec4::ONE - self.coat.mean_albedo()).max(Vec4::splat(1e-4));
-        self.base * FRAC_1_PI * through / entering
+        self.base * FRAC_1_PI * self.coat.through(wo.z, wi.z)
     }
 
     /// The probability of sampling the coat, by its share of the light reflected toward `wo`.

@@ -52,6 +52,7 @@ impl VertexExtras {
 
     /// The material inputs at barycentric weights `w` of the triangle of vertices `v`, with
     /// `uv0` the first set's coordinates there.
+    #[inline]
     pub fn inputs(&self, v: [usize; 3], w: Vec3, uv0: Vec2) -> SurfaceInputs {
         let lerp2 = |a: &[Vec2]| a[v[0]] * w.x + a[v[1]] * w.y + a[v[2]] * w.z;
         let uv1 = if self.uvs1.is_empty() { Vec2::ZERO } else { lerp2(&self.uvs1) };

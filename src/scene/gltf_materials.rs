@@ -10,8 +10,9 @@ use super::extras::{self, MaterialExtras};
 use super::gltf_textures::{decode, info_map, normal_map};
 use gltf::material::AlphaMode;
 
-use crate::materials::{Alpha, BaseColour, Coverage, DataTexture, Material, NormalMap, Specular, Texture};
+use crate::materials::{Alpha, BaseColour, Coverage, Material, NormalMap, Specular};
 use crate::spectrum::{Dispersion, RgbSpectrum};
+use crate::texture::{DataTexture, Texture};
 
 /// A glTF material as a Caustic material.
 pub fn material(m: &gltf::Material, images: &[gltf::image::Data]) -> Result<Material, String> {
@@ -50,6 +51,12 @@ pub fn material(m: &gltf::Material, images: &[gltf::image::Data]) -> Result<Mate
         None => None,
     };
     let emission = Vec3::from(m.emissive_factor()) * m.emissive_strength().unwrap_or(1.0);
+    let emission_texture = match m.emissive_texture().and_then(|i| Some((info_map(&i)?, i))) {
+        Some((map, info)) if emission.max_element() > 0.0 => {
+            Some(Arc::new(Texture::emission(&image(info.texture())?, map, emission)))
+        }
+        _ => None,
+    };
     let specular = m
         .specular()
         .map_or((1.0, Vec3::ONE), |s| (s.specular_factor(), Vec3::from(s.specular_color_factor())));
@@ -68,6 +75,7 @@ pub fn material(m: &gltf::Material, images: &[gltf::image::Data]) -> Result<Mate
         roughness: pbr.roughness_factor().clamp(0.0, 1.0),
         transmission: m.transmission().map_or(0.0, |t| t.transmission_factor()).clamp(0.0, 1.0),
         ior: dispersion_law(m).map_err(|e| format!("material '{}': {e}", m.name().unwrap_or("unnamed")))?,
+        emission_texture,
         emission: (emission.max_element() > 0.0).then(|| RgbSpectrum::illuminant(emission)),
         emits_both_sides: true,
         thin: false,

@@ -6,7 +6,7 @@ use glam::{Vec2, Vec4};
 use gltf::image::Format;
 use gltf::texture::WrappingMode;
 
-use crate::materials::{Rgba, TextureMap, Wrap, UV_SETS};
+use crate::texture::{Rgba, TextureMap, Wrap, UV_SETS};
 
 /// A decoded image as RGBA in [0, 1] (grey images' value in R, G and B; alpha 1 where absent).
 pub fn decode(image: &gltf::image::Data) -> Result<Rgba, String> {

@@ -5,7 +5,7 @@
 //! Occlusion textures are not light transport and are ignored without a warning.
 
 use super::gltf_textures::{info_set, normal_set};
-use crate::materials::UV_SETS;
+use crate::texture::UV_SETS;
 
 /// Material extensions Caustic renders.
 const RENDERED_MATERIAL_EXTENSIONS: &[&str] = &[
@@ -39,7 +39,6 @@ pub fn material_warnings(m: &gltf::Material) -> Vec<String> {
 fn unrendered_textures(m: &gltf::Material) -> Vec<String> {
     let pbr = m.pbr_metallic_roughness();
     let named = [
-        ("emissive", m.emissive_texture().is_some()),
         ("specular", has_texture(m, "KHR_materials_specular", "specularTexture")),
         ("specular colour", has_texture(m, "KHR_materials_specular", "specularColorTexture")),
     ];
@@ -52,6 +51,7 @@ fn unrendered_textures(m: &gltf::Material) -> Vec<String> {
         ("base colour", pbr.base_color_texture().map(|i| info_set(&i))),
         ("metallic-roughness", pbr.metallic_roughness_texture().map(|i| info_set(&i))),
         ("normal", m.normal_texture().map(|n| normal_set(&n))),
+        ("emissive", m.emissive_texture().map(|i| info_set(&i))),
     ];
     for (what, set) in sets {
         if let Some(set) = set.filter(|&s| s as usize >= UV_SETS) {

@@ -30,6 +30,7 @@ use crate::camera::Camera;
 use crate::lights::{BoundingSphere, Light};
 use crate::materials::{Material, ShadingFrame, SurfaceInputs};
 use crate::spectrum::{SampledSpectrum, Wavelengths};
+use crate::texture::UV_SETS;
 
 pub use attributes::VertexExtras;
 pub use description::Description;
@@ -102,6 +103,11 @@ impl Geometry {
         let uv = self.uvs[i0] * w[0] + self.uvs[i1] * w[1] + self.uvs[i2] * w[2];
         let inputs = self.extras.inputs([i0, i1, i2], Vec3::from(w), uv);
         Surface { p: hit.p, frame: ShadingFrame { n, ng }, inputs, material: t.material, scale: hit.scale }
+    }
+
+    /// Vertex `v`'s texture coordinates, one pair per set.
+    pub fn uvs_at(&self, v: usize) -> [Vec2; UV_SETS] {
+        [self.uvs[v], self.extras.uvs1.get(v).copied().unwrap_or(Vec2::ZERO)]
     }
 
     /// The smallest and largest corner of the finite vertices, or `None` when there are none

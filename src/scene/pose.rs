@@ -10,10 +10,12 @@ use std::sync::Arc;
 use glam::{Mat3, Mat4, Vec3};
 
 use super::description::{Description, Lens, LensSettings, MeshInstance, PunctualKind, PunctualLight};
-use super::{bounding_sphere, Geometry, OpenEdges, OpenSides, Scene, DEFAULT_RADIUS_FRACTION, NOT_A_LIGHT};
+use super::{
+    bounding_sphere, Geometry, OpenEdges, OpenSides, Scene, TriangleRef, DEFAULT_RADIUS_FRACTION, NOT_A_LIGHT,
+};
 use crate::accel::Bvh;
 use crate::camera::Camera;
-use crate::lights::{BoundingSphere, EmittingTriangle, Light};
+use crate::lights::{BoundingSphere, Emission, EmittingTriangle, Light};
 use crate::materials::Material;
 
 /// A span of glTF time, in seconds, that a render covers (frames and their shutters).
@@ -88,12 +90,24 @@ fn triangle_lights(
     let mut of_triangle = vec![NOT_A_LIGHT; geometry.triangles.len()];
     for (i, (t, corners)) in geometry.triangles.iter().zip(geometry.corners()).enumerate() {
         let material = &materials[t.material as usize];
-        if let Some(radiance) = material.emission {
+        if let Some(emission) = emission(geometry, t, material) {
             of_triangle[i] = (first_light + lights.len()) as u32;
-            lights.push(Light::Triangle(EmittingTriangle::new(corners, radiance, material.emits_both_sides)));
+            lights.push(Light::Triangle(EmittingTriangle::new(corners, emission, material.emits_both_sides)));
         }
     }
     (lights, of_triangle)
+}
+
+/// What triangle `t` of `geometry` emits, if its material emits.
+fn emission(geometry: &Geometry, t: &TriangleRef, material: &Material) -> Option<Emission> {
+    let radiance = material.emission?;
+    Some(match &material.emission_texture {
+        None => Emission::Uniform(radiance),
+        Some(texture) => {
+            let uvs = t.vertices.map(|v| geometry.uvs_at(v as usize));
+            Emission::Textured { texture: texture.clone(), uvs }
+        }
+    })
 }
 
 /// A punctual light posed with its node's world matrix (the sphere is set by the pose).

@@ -157,7 +157,7 @@ impl DirectLight<'_> {
         }
         let surface = scene.surface(&hit);
         let material = &scene.materials[surface.material as usize];
-        let radiance = material.emitted(wavelengths, surface.frame.ng, -sample.wi);
+        let radiance = material.emitted(&surface.inputs, wavelengths, surface.frame.ng, -sample.wi);
         let value =
             sample.weight * radiance * power_heuristic(sample.pdf, light_pdf(light as usize, surface.p));
         DirectTerm { value, ray }

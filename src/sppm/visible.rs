@@ -117,7 +117,8 @@ pub fn continue_eye_path(
         let surface = scene.surface(&hit);
         let material = &scene.materials[surface.material as usize];
         let wo = -state.direction;
-        state.radiance += state.beta * material.emitted(&pass.wavelengths, surface.frame.ng, wo);
+        state.radiance +=
+            state.beta * material.emitted(&surface.inputs, &pass.wavelengths, surface.frame.ng, wo);
         let rng = &mut state.rng;
         let frame = material.shading_frame(&surface.inputs, surface.frame);
         let bsdf = material.bsdf(&surface.inputs, frame.n, wo, &pass.wavelengths, rng.next_1d());

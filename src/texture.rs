@@ -1,7 +1,9 @@
 //! glTF textures: where a surface point's texture coordinates land in an image (the texture
-//! coordinate set, `KHR_texture_transform`, the sampler's wrap modes) and what the image holds
-//! there: reflectance spectra (colour textures, whose sRGB texels are fitted once at load) or
-//! linear data (metallic-roughness, normals, factors), interpolated bilinearly.
+//! coordinate set, `KHR_texture_transform`, the sampler's wrap modes and filter) and what the
+//! image holds there: spectra (colour textures, whose sRGB texels are fitted once at load, as
+//! reflectances or as emission) or linear data (metallic-roughness, normals, alpha), interpolated
+//! bilinearly. Materials read them at surface points, emitting triangles at the points they
+//! sample.
 //!
 //! Texel (0, 0) is the image's top-left corner, at texture coordinates (0, 0): glTF's origin.
 
@@ -128,7 +130,7 @@ pub fn srgb_to_linear(c: f32) -> f32 {
     }
 }
 
-/// A texture of reflectance spectra (base colour, specular colour).
+/// A texture of spectra: reflectances (base colour) or emission.
 #[derive(Clone, Debug)]
 pub struct Texture {
     map: TextureMap,
@@ -138,10 +140,22 @@ pub struct Texture {
 }
 
 impl Texture {
+    /// Emission from sRGB texels times the linear `factor` (any non-negative colour: the
+    /// spectra of lights, times D65 where they are read).
+    pub fn emission(image: &Rgba, map: TextureMap, factor: Vec3) -> Self {
+        Self::fitted(image, map, |rgb| RgbSpectrum::illuminant(rgb * factor))
+    }
+
     /// Reflectances from sRGB texels times the linear `factor`. Fitting a spectrum is slow, so
     /// texels share fits through a cache keyed by their colour at the image's bit depth (at most
     /// 10 bits a channel, finer than 8-bit sRGB's steps).
     pub fn reflectance(image: &Rgba, map: TextureMap, factor: Vec3) -> Self {
+        Self::fitted(image, map, |rgb| RgbSpectrum::reflectance((rgb * factor).clamp(Vec3::ZERO, Vec3::ONE)))
+    }
+
+    /// Spectra `fit` gives for the texels' linear colours, fitted once per colour at the
+    /// image's bit depth (at most 10 bits a channel).
+    fn fitted(image: &Rgba, map: TextureMap, fit: impl Fn(Vec3) -> RgbSpectrum) -> Self {
         let levels = ((1u32 << image.bits.min(10)) - 1) as f32;
         let mut cache: HashMap<[u16; 3], RgbSpectrum> = HashMap::new();
         let texels = image
@@ -149,16 +163,21 @@ impl Texture {
             .iter()
             .map(|p| {
                 let key = [p.x, p.y, p.z].map(|c| (c.clamp(0.0, 1.0) * levels).round() as u16);
-                *cache.entry(key).or_insert_with(|| {
-                    let rgb = Vec3::from(key.map(|c| srgb_to_linear(f32::from(c) / levels))) * factor;
-                    RgbSpectrum::reflectance(rgb.clamp(Vec3::ZERO, Vec3::ONE))
-                })
+                *cache
+                    .entry(key)
+                    .or_insert_with(|| fit(Vec3::from(key.map(|c| srgb_to_linear(f32::from(c) / levels)))))
             })
             .collect();
         Texture { map, width: image.width, height: image.height, texels }
     }
 
-    /// The reflectance at the surface's texture coordinates and four wavelengths, nm.
+    /// The luminance of the texels' spectra under D65 at the surface's texture coordinates.
+    pub fn luminance(&self, uvs: &[Vec2; UV_SETS]) -> f64 {
+        let taps = self.map.taps(uvs, self.width, self.height);
+        taps.iter().map(|&(i, w)| self.texels[i].luminance() * f64::from(w)).sum()
+    }
+
+    /// The value at the surface's texture coordinates and four wavelengths, nm.
     pub fn eval(&self, uvs: &[Vec2; UV_SETS], lambda_nm: Vec4) -> Vec4 {
         self.map
             .taps(uvs, self.width, self.height)
