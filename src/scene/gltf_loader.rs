@@ -551,8 +551,13 @@ fn optional_attribute<T: Default + Clone>(
     if values.is_empty() || values.len() == count {
         return values;
     }
-    matching_attribute(values, count, attribute, mesh, warnings);
+    warnings.push(mismatch(values.len(), count, attribute, mesh));
     Vec::new()
+}
+
+/// The warning for an attribute of `len` entries on a mesh of `count` positions.
+fn mismatch(len: usize, count: usize, attribute: &str, mesh: &str) -> String {
+    format!("mesh '{mesh}': {attribute} has {len} entries for {count} positions; ignored")
 }
 
 /// Linear RGB colours as reflectance spectra, fitted once per colour at 10 bits a channel.
@@ -581,10 +586,7 @@ fn matching_attribute<T: Default + Clone>(
     if values.len() == count {
         return values;
     }
-    warnings.push(format!(
-        "mesh '{mesh}': {attribute} has {} entries for {count} positions; ignored",
-        values.len()
-    ));
+    warnings.push(mismatch(values.len(), count, attribute, mesh));
     vec![T::default(); count]
 }
 

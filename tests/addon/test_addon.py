@@ -19,28 +19,20 @@ HOME = tempfile.mkdtemp(prefix="caustic-addon-home-")
 os.environ["HOME"] = HOME
 
 import bpy  # noqa: E402  (first: it makes Blender's own modules importable)
-import addon_utils  # noqa: E402
 import mathutils  # noqa: E402
 import numpy as np  # noqa: E402
 import OpenEXR  # noqa: E402
 from bpy_extras.object_utils import world_to_camera_view  # noqa: E402
 
 ROOT = pathlib.Path(__file__).resolve().parents[2]
+sys.path.insert(0, str(ROOT / "tests" / "addon"))
+from enable_addon import enable_addon  # noqa: E402
+
 BINARY = os.environ["CAUSTIC_BINARY"]
 OUT = pathlib.Path(tempfile.mkdtemp(prefix="caustic-addon-out-"))
 
 
-def enable_addon():
-    """Links addon/ into the user's add-ons as `caustic` and enables it in the preferences."""
-    addons = pathlib.Path(bpy.utils.user_resource('SCRIPTS', path="addons", create=True))
-    (addons / "caustic").symlink_to(ROOT / "addon")
-    bpy.utils.refresh_script_paths()
-    addon_utils.enable("caustic", default_set=True, handle_error=None)
-    bpy.context.preferences.addons["caustic"].preferences.binary = BINARY
-    return sys.modules["caustic.engine"]
-
-
-ENGINE = enable_addon()
+ENGINE = enable_addon(BINARY)
 STARTED = []  # every renderer process the add-on starts
 
 

@@ -18,13 +18,13 @@ HOME = tempfile.mkdtemp(prefix="caustic-parity-home-")
 os.environ["HOME"] = HOME
 
 import bpy  # noqa: E402
-import addon_utils  # noqa: E402
 import numpy as np  # noqa: E402
 import OpenEXR  # noqa: E402
 
 HERE = pathlib.Path(__file__).resolve().parent
 sys.path.insert(0, str(HERE))
 import parity_scenes  # noqa: E402
+from enable_addon import enable_addon  # noqa: E402
 
 ROOT = HERE.parents[1]
 REFERENCES = ROOT / "tests" / "references" / "parity"
@@ -33,14 +33,6 @@ OUT = pathlib.Path(tempfile.mkdtemp(prefix="caustic-parity-out-"))
 PASSES = 256
 TOLERANCE = 0.05
 LUMINANCE = np.array([0.2126, 0.7152, 0.0722])
-
-
-def enable_addon():
-    addons = pathlib.Path(bpy.utils.user_resource('SCRIPTS', path="addons", create=True))
-    (addons / "caustic").symlink_to(ROOT / "addon")
-    bpy.utils.refresh_script_paths()
-    addon_utils.enable("caustic", default_set=True, handle_error=None)
-    bpy.context.preferences.addons["caustic"].preferences.binary = BINARY
 
 
 def render_caustic(name):
@@ -129,5 +121,5 @@ class Parity(unittest.TestCase):
 
 
 if __name__ == "__main__":
-    enable_addon()
+    enable_addon(BINARY)
     unittest.main(argv=[sys.argv[0], "-v"])
