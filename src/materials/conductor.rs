@@ -3,13 +3,9 @@
 
 use glam::{Vec2, Vec3, Vec4};
 
-use super::{face_toward, microfacet, BsdfSample};
+use super::microfacet::{self, reflect};
+use super::{face_toward, BsdfSample};
 use crate::spectrum::SampledSpectrum;
-
-/// Mirror reflection of `wo` about `n`.
-pub fn reflect(wo: Vec3, n: Vec3) -> Vec3 {
-    2.0 * wo.dot(n) * n - wo
-}
 
 /// The perfect mirror: `wi` is `wo` reflected, weight `F(cos)`.
 pub fn sample_smooth(f0: SampledSpectrum, n: Vec3, wo: Vec3) -> Option<BsdfSample> {

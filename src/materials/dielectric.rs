@@ -5,7 +5,7 @@
 
 use glam::{Vec3, Vec4};
 
-use super::{conductor::reflect, face_toward, BsdfSample, ShadingFrame, Transport};
+use super::{face_toward, microfacet::reflect, BsdfSample, ShadingFrame, Transport};
 
 /// Unpolarised Fresnel reflectance for `cos_i` (cosine on the incident side) and relative index
 /// `eta` (transmitted over incident).

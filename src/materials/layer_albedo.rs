@@ -16,9 +16,9 @@ use std::sync::LazyLock;
 
 use glam::{Vec2, Vec3};
 
-use super::conductor::reflect;
 use super::dielectric::fresnel_dielectric;
 use super::microfacet;
+use super::microfacet::reflect;
 
 /// Table nodes over `sqrt(mu)`, `mu` the cosine of the viewing direction (denser toward grazing,
 /// where the albedo changes fastest).

@@ -5,7 +5,6 @@
 
 use glam::{Vec2, Vec3, Vec4};
 
-use super::conductor::reflect;
 use super::face_toward;
 use crate::sampling::basis;
 use crate::spectrum::SampledSpectrum;
@@ -51,6 +50,11 @@ pub fn sample_visible_normal(alpha: f32, wo: Vec3, u: Vec2) -> Vec3 {
 /// Schlick's Fresnel approximation.
 pub fn schlick(f0: SampledSpectrum, cos_theta: f32) -> SampledSpectrum {
     f0 + (Vec4::ONE - f0) * (1.0 - cos_theta.clamp(0.0, 1.0)).powi(5)
+}
+
+/// Mirror reflection of `wo` about `n`.
+pub fn reflect(wo: Vec3, n: Vec3) -> Vec3 {
+    2.0 * wo.dot(n) * n - wo
 }
 
 /// `wo` and `wi` in the frame of `n` (flipped to the side of `wo`), and that frame.
