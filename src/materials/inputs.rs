@@ -7,25 +7,14 @@ use std::sync::Arc;
 use glam::{Vec2, Vec3, Vec4};
 
 use super::ShadingFrame;
-use crate::spectrum::RgbSpectrum;
+use crate::spectrum::{RgbSpectrum, SampledSpectrum};
 use crate::texture::{DataTexture, UV_SETS};
 
-/// The vertex colour at a point: the triangle's three corner spectra and the point's barycentric
-/// weights (spectra are interpolated by value at each wavelength, as texels are).
-#[derive(Clone, Copy, Debug)]
-pub struct VertexColour {
-    /// The corners' reflectance spectra.
-    pub corners: [RgbSpectrum; 3],
-    /// Barycentric weights of the point.
-    pub weights: Vec3,
-}
-
-impl VertexColour {
-    /// The colour's reflectance at four wavelengths, nm.
-    pub fn eval(&self, lambda_nm: Vec4) -> Vec4 {
-        let [a, b, c] = self.corners.map(|s| s.eval_lanes(lambda_nm));
-        a * self.weights.x + b * self.weights.y + c * self.weights.z
-    }
+/// The vertex colour at barycentric weights `w` of a triangle whose corners' reflectance spectra
+/// are `corners`, at four wavelengths, nm (spectra interpolated by value, as texels are).
+pub fn vertex_colour(corners: [&RgbSpectrum; 3], w: Vec3, lambda_nm: Vec4) -> SampledSpectrum {
+    let [a, b, c] = corners.map(|s| s.eval_lanes(lambda_nm));
+    a * w.x + b * w.y + c * w.z
 }
 
 /// A surface point's inputs to its material.
@@ -33,8 +22,8 @@ impl VertexColour {
 pub struct SurfaceInputs {
     /// Texture coordinates, one pair per set (zero where the mesh has no such set).
     pub uv: [Vec2; UV_SETS],
-    /// `COLOR_0`, multiplying the base colour, if the mesh has it.
-    pub colour: Option<VertexColour>,
+    /// `COLOR_0` at the path's wavelengths, multiplying the base colour, if the mesh has it.
+    pub colour: Option<SampledSpectrum>,
     /// World-space tangent (xyz) and handedness (w: the bitangent is `w n x t`); zero where the
     /// mesh has none.
     pub tangent: Vec4,

@@ -171,8 +171,8 @@ impl Material {
             BaseColour::Constant(spectrum) => spectrum.eval_lanes(lambda.nm),
             BaseColour::Texture(texture) => texture.eval(&inputs.uv, lambda.nm),
         };
-        match &inputs.colour {
-            Some(colour) => base * colour.eval(lambda.nm),
+        match inputs.colour {
+            Some(colour) => base * colour,
             None => base,
         }
     }

@@ -24,7 +24,7 @@ use glam::{Vec2, Vec3, Vec4};
 use crate::spectrum::SampledSpectrum;
 
 pub use dielectric::fresnel_dielectric;
-pub use inputs::{NormalMap, SurfaceInputs, VertexColour};
+pub use inputs::{vertex_colour, NormalMap, SurfaceInputs};
 pub use layer_albedo::{eta_of_f0, f0_of_eta};
 pub use material::{Alpha, BaseColour, Coverage, Material, Specular, SMOOTH_ROUGHNESS};
 pub use plastic::{Coat, Plastic};

@@ -4,8 +4,8 @@
 
 use glam::{Mat3, Vec2, Vec3, Vec4};
 
-use crate::materials::{SurfaceInputs, VertexColour};
-use crate::spectrum::RgbSpectrum;
+use crate::materials::{vertex_colour, SurfaceInputs};
+use crate::spectrum::{RgbSpectrum, Wavelengths};
 
 /// Optional vertex attributes, one entry per vertex or none.
 #[derive(Clone, Debug, Default)]
@@ -50,14 +50,14 @@ impl VertexExtras {
         append(&mut self.tangents, len, &from.tangents, added, Vec4::ZERO, turn);
     }
 
-    /// The material inputs at barycentric weights `w` of the triangle of vertices `v`, with
-    /// `uv0` the first set's coordinates there.
+    /// The material inputs at barycentric weights `w` of the triangle of vertices `v` and the
+    /// wavelengths `lambda`, with `uv0` the first set's coordinates there.
     #[inline]
-    pub fn inputs(&self, v: [usize; 3], w: Vec3, uv0: Vec2) -> SurfaceInputs {
+    pub fn inputs(&self, v: [usize; 3], w: Vec3, uv0: Vec2, lambda: &Wavelengths) -> SurfaceInputs {
         let lerp2 = |a: &[Vec2]| a[v[0]] * w.x + a[v[1]] * w.y + a[v[2]] * w.z;
         let uv1 = if self.uvs1.is_empty() { Vec2::ZERO } else { lerp2(&self.uvs1) };
-        let colour = (!self.colours.is_empty())
-            .then(|| VertexColour { corners: v.map(|i| self.colours[i]), weights: w });
+        let colour =
+            (!self.colours.is_empty()).then(|| vertex_colour(v.map(|i| &self.colours[i]), w, lambda.nm));
         let tangent = if self.tangents.is_empty() {
             Vec4::ZERO
         } else {

@@ -91,7 +91,7 @@ impl Geometry {
 
     /// The surface at `hit` on triangle `i`: the point, geometric normal and scale come with
     /// the hit; the shading normal, texture coordinates and material are looked up here.
-    fn surface(&self, i: usize, hit: &Hit) -> Surface {
+    fn surface(&self, i: usize, hit: &Hit, lambda: &Wavelengths) -> Surface {
         let t = self.triangles[i];
         let [i0, i1, i2] = t.vertices.map(|v| v as usize);
         let b = hit.barycentric;
@@ -101,7 +101,7 @@ impl Geometry {
         let ng = hit.ng;
         let n = if n == Vec3::ZERO { ng } else { n };
         let uv = self.uvs[i0] * w[0] + self.uvs[i1] * w[1] + self.uvs[i2] * w[2];
-        let inputs = self.extras.inputs([i0, i1, i2], Vec3::from(w), uv);
+        let inputs = self.extras.inputs([i0, i1, i2], Vec3::from(w), uv, lambda);
         Surface { p: hit.p, frame: ShadingFrame { n, ng }, inputs, material: t.material, scale: hit.scale }
     }
 
@@ -178,12 +178,13 @@ impl Scene {
         self.fixed.triangles.len() + self.moving.triangles.len()
     }
 
-    /// The surface where a ray hit.
-    pub fn surface(&self, hit: &Hit) -> Surface {
+    /// The surface where a ray hit, with what its material reads there at the wavelengths
+    /// `lambda`.
+    pub fn surface(&self, hit: &Hit, lambda: &Wavelengths) -> Surface {
         let fixed = self.fixed.triangles.len();
         match (hit.triangle as usize).checked_sub(fixed) {
-            None => self.fixed.surface(hit.triangle as usize, hit),
-            Some(moving) => self.moving.surface(moving, hit),
+            None => self.fixed.surface(hit.triangle as usize, hit, lambda),
+            Some(moving) => self.moving.surface(moving, hit, lambda),
         }
     }
 

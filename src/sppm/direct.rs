@@ -91,7 +91,7 @@ impl DirectLight<'_> {
         let t_max = if sample.distance.is_finite() { sample.distance * (1.0 - 1e-4) } else { f32::INFINITY };
         let ray = ShadowRay { origin, direction: sample.wi, t_max };
         let through = if renderer.has_cut_away_surfaces {
-            see_through::transmittance(renderer, origin, sample.wi, t_max)
+            see_through::transmittance(renderer, wavelengths, origin, sample.wi, t_max)
         } else if renderer.accel.occluded(origin, sample.wi, t_max) {
             0.0
         } else {
@@ -128,7 +128,7 @@ impl DirectLight<'_> {
             renderer.light_choice.probability(index) * scene.lights[index].pdf_incident(point.p, sample.wi, q)
         };
         let (hit, through) = if renderer.has_cut_away_surfaces {
-            see_through::first_hit(renderer, origin, sample.wi)
+            see_through::first_hit(renderer, wavelengths, origin, sample.wi)
         } else {
             (renderer.accel.intersect(origin, sample.wi, f32::INFINITY), 1.0)
         };
@@ -155,7 +155,7 @@ impl DirectLight<'_> {
         if light == NOT_A_LIGHT {
             return DirectTerm::ZERO;
         }
-        let surface = scene.surface(&hit);
+        let surface = scene.surface(&hit, wavelengths);
         let material = &scene.materials[surface.material as usize];
         let radiance = material.emitted(&surface.inputs, wavelengths, surface.frame.ng, -sample.wi);
         let value =

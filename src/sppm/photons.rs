@@ -108,7 +108,7 @@ pub fn continue_photon(
         let Some(hit) = hit else {
             break;
         };
-        let surface = scene.surface(&hit);
+        let surface = scene.surface(&hit, &pass.wavelengths);
         let material = &scene.materials[surface.material as usize];
         let wo = -state.direction;
         let rng = &mut state.rng;

@@ -10,13 +10,20 @@ use glam::Vec3;
 use super::renderer::Renderer;
 use crate::accel::Hit;
 use crate::geometry::offset_origin;
+use crate::spectrum::Wavelengths;
 
 /// More cut-away surfaces than this along one ray are taken as blocking it.
 const MAX_CROSSINGS: u32 = 64;
 
 /// The share of light that reaches `t_max` along a ray from `origin` (0 where an opaque surface
 /// blocks it), for shadow rays of scenes with cut-away surfaces.
-pub fn transmittance(renderer: &Renderer, origin: Vec3, direction: Vec3, t_max: f32) -> f32 {
+pub fn transmittance(
+    renderer: &Renderer,
+    lambda: &Wavelengths,
+    origin: Vec3,
+    direction: Vec3,
+    t_max: f32,
+) -> f32 {
     let end = origin + direction * t_max;
     let mut through = 1.0;
     let mut origin = origin;
@@ -25,7 +32,7 @@ pub fn transmittance(renderer: &Renderer, origin: Vec3, direction: Vec3, t_max: 
         let Some(hit) = renderer.accel.intersect_opaque(origin, direction, remaining) else {
             return through;
         };
-        through *= 1.0 - opacity(renderer, &hit);
+        through *= 1.0 - opacity(renderer, lambda, &hit);
         if through <= 0.0 {
             return 0.0;
         }
@@ -36,14 +43,19 @@ pub fn transmittance(renderer: &Renderer, origin: Vec3, direction: Vec3, t_max: 
 
 /// The first surface along a ray that alpha does not cut away entirely, and the share of light
 /// that passes the cut-away surfaces before it, for BSDF-sampled rays looking for emitters.
-pub fn first_hit(renderer: &Renderer, origin: Vec3, direction: Vec3) -> (Option<Hit>, f32) {
+pub fn first_hit(
+    renderer: &Renderer,
+    lambda: &Wavelengths,
+    origin: Vec3,
+    direction: Vec3,
+) -> (Option<Hit>, f32) {
     let mut through = 1.0;
     let mut origin = origin;
     for _ in 0..MAX_CROSSINGS {
         let Some(hit) = renderer.accel.intersect(origin, direction, f32::INFINITY) else {
             return (None, through);
         };
-        let opacity = opacity(renderer, &hit);
+        let opacity = opacity(renderer, lambda, &hit);
         if opacity >= 1.0 || renderer.scene.triangle_light(hit.triangle) != crate::scene::NOT_A_LIGHT {
             return (Some(hit), through);
         }
@@ -54,7 +66,7 @@ pub fn first_hit(renderer: &Renderer, origin: Vec3, direction: Vec3) -> (Option<
 }
 
 /// The probability that the surface hit is there.
-fn opacity(renderer: &Renderer, hit: &Hit) -> f32 {
-    let surface = renderer.scene.surface(hit);
+fn opacity(renderer: &Renderer, lambda: &Wavelengths, hit: &Hit) -> f32 {
+    let surface = renderer.scene.surface(hit, lambda);
     renderer.scene.materials[surface.material as usize].alpha.opacity(&surface.inputs)
 }

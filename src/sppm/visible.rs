@@ -114,7 +114,7 @@ pub fn continue_eye_path(
             state.radiance += state.beta * scene.escaped_radiance(state.direction, &pass.wavelengths);
             break;
         };
-        let surface = scene.surface(&hit);
+        let surface = scene.surface(&hit, &pass.wavelengths);
         let material = &scene.materials[surface.material as usize];
         let wo = -state.direction;
         state.radiance +=
