@@ -68,6 +68,9 @@ fn unrendered_features_are_named() {
     let paint = gltf.material(json!({"name": "Car paint",
         "extensions": {"KHR_materials_iridescence": {"iridescenceFactor": 1.0}}}));
     gltf.sphere("Body", [0.0, 0.0, 0.0], 1.0, 8, paint);
+    let decal = gltf.material(json!({"name": "Decal", "alphaMode": "BLEND"}));
+    gltf.mesh("Sticker", &[[[0.0, 0.0, 1.1], [0.2, 0.0, 1.1], [0.0, 0.2, 1.1]]], decal);
+    gltf.attribute("COLOR_0", &[[1.0f32, 1.0, 1.0, 0.5]; 3].concat(), 4, "VEC4");
     gltf.camera([0.0, 0.0, 4.0], [0.0, 0.0, -1.0], 0.5);
     gltf.scene_extras(json!({"world": {"color": [1.0, 1.0, 1.0], "strength": 1.0}}));
     let path = gltf.write(dir.path(), "paint");
