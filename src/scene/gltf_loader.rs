@@ -454,17 +454,18 @@ impl Builder<'_> {
                 .map(|t| t.into_f32().map(Vec2::from).collect())
                 .unwrap_or_else(|| vec![Vec2::ZERO; count]);
             // Attributes must have one entry per position; a mismatched one is dropped, not read past.
+            let material = primitive.material().index().map_or(self.material_offset, |i| i as u32);
+            let cuts = self.materials[material as usize].alpha.cuts();
             let warnings = &mut self.warnings;
             let (normals, uvs) = (
                 matching_attribute(normals, count, "NORMAL", name, warnings),
                 matching_attribute(uvs, count, "TEXCOORD_0", name, warnings),
             );
-            let extras = vertex_extras(&reader, count, name, warnings);
+            let extras = vertex_extras(&reader, count, name, cuts, warnings);
             let indices: Vec<u32> = match reader.read_indices() {
                 Some(indices) => indices.into_u32().collect(),
                 None => (0..count as u32).collect(),
             };
-            let material = primitive.material().index().map_or(self.material_offset, |i| i as u32);
             let mut triangles = Vec::with_capacity(indices.len() / 3);
             let mut skipped = 0;
             for chunk in indices.chunks_exact(3) {
@@ -512,11 +513,13 @@ impl Builder<'_> {
 }
 
 /// `TEXCOORD_1`, `COLOR_0` (fitted to reflectance spectra) and `TANGENT` of a primitive of
-/// `count` vertices; each empty where the primitive has none or a mismatched one (warned).
+/// `count` vertices; each empty where the primitive has none or a mismatched one (warned). The
+/// colours' alpha is not rendered: warned where it is below 1 on a material whose alpha `cuts`.
 fn vertex_extras<'a, 's, F>(
     reader: &gltf::mesh::Reader<'a, 's, F>,
     count: usize,
     name: &str,
+    cuts: bool,
     warnings: &mut Vec<String>,
 ) -> VertexExtras
 where
@@ -527,6 +530,9 @@ where
     let colours: Vec<Vec4> =
         reader.read_colors(0).map(|c| c.into_rgba_f32().map(Vec4::from).collect()).unwrap_or_default();
     let tangents: Vec<Vec4> = reader.read_tangents().map(|t| t.map(Vec4::from).collect()).unwrap_or_default();
+    if cuts && colours.iter().any(|c| c.w < 1.0) {
+        warnings.push(format!("mesh '{name}': the alpha of its vertex colours (COLOR_0) is not rendered"));
+    }
     let tangents = optional_attribute(tangents, count, "TANGENT", name, warnings);
     let finite = tangents.iter().all(|t| t.is_finite());
     if !finite {

@@ -73,15 +73,6 @@ pub fn mesh_warnings(mesh: &gltf::Mesh) -> Vec<String> {
     let primitives: Vec<_> = mesh.primitives().collect();
     let has = |f: &dyn Fn(&gltf::Primitive) -> bool| primitives.iter().any(f);
     let mut unrendered: Vec<String> = Vec::new();
-    let alpha_from_colours = |p: &gltf::Primitive| {
-        let rgba = p
-            .get(&gltf::Semantic::Colors(0))
-            .is_some_and(|a| a.dimensions() == gltf::accessor::Dimensions::Vec4);
-        rgba && p.material().alpha_mode() != gltf::material::AlphaMode::Opaque
-    };
-    if has(&alpha_from_colours) {
-        unrendered.push("the alpha of its vertex colours (COLOR_0) is not rendered".to_string());
-    }
     if has(&|p| p.morph_targets().next().is_some()) {
         unrendered.push("morph targets (shape keys) are not rendered: the mesh keeps its basis shape".into());
     }
