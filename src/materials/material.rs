@@ -234,8 +234,27 @@ impl Material {
     /// The BSDF at a surface point, seen from `wo` at shading normal `n` (the material's
     /// [`Material::shading_frame`]), and the wavelengths `lambda`, with `u_lobe` a uniform number
     /// that picks a lobe where the material mixes several.
-    #[inline]
+    #[inline(always)]
     pub fn bsdf(&self, inputs: &SurfaceInputs, n: Vec3, wo: Vec3, lambda: &Wavelengths, u_lobe: f32) -> Bsdf {
+        if self.is_lambertian() {
+            return Bsdf::Diffuse { albedo: self.reflectance(inputs, lambda) };
+        }
+        self.mixed_bsdf(inputs, n, wo, lambda, u_lobe)
+    }
+
+    /// Whether it is a Lambertian surface and nothing else (no specular layer, metal, glass,
+    /// emission or alpha): resolved where the path is traced, with no call, as most are.
+    fn is_lambertian(&self) -> bool {
+        self.specular.is_none()
+            && self.transmission == 0.0
+            && self.metallic == 0.0
+            && self.emission.is_none()
+            && !self.alpha.cuts()
+    }
+
+    /// [`Material::bsdf`] where lobes are mixed, layered, emitting or cut away.
+    #[inline(never)]
+    fn mixed_bsdf(&self, inputs: &SurfaceInputs, n: Vec3, wo: Vec3, lambda: &Wavelengths, u_lobe: f32) -> Bsdf {
         let u_lobe = match self.alpha.cuts() {
             false => u_lobe,
             true => {
@@ -273,6 +292,6 @@ impl Material {
         if smooth {
             return plastic::choose_smooth(plastic, n, wo, u_lobe);
         }
-        Bsdf::Plastic(plastic)
+        plastic.bsdf()
     }
 }

@@ -95,6 +95,17 @@ fn share(part: SampledSpectrum, rest: SampledSpectrum) -> f32 {
 }
 
 impl Plastic {
+    /// A base of albedo `base` under a coat of reflectance `f0`, index `eta` and GGX `alpha`.
+    pub fn new(base: SampledSpectrum, f0: SampledSpectrum, eta: f32, alpha: f32) -> Self {
+        Plastic { base, coat: Coat::new(f0, eta, alpha) }
+    }
+
+    /// As a [`Bsdf`].
+    pub fn bsdf(self) -> Bsdf {
+        let Coat { f0, eta, alpha } = self.coat;
+        Bsdf::Plastic { base: self.base, f0, eta, alpha }
+    }
+
     /// Whether the coat's reflection is part of this BSDF (a rough coat).
     pub fn has_rough_coat(&self) -> bool {
         self.coat.alpha > 0.0
@@ -182,6 +193,6 @@ pub fn choose_smooth(plastic: Plastic, n: Vec3, wo: Vec3, u: f32) -> Bsdf {
     if u < p {
         Bsdf::Mirror { weight: mirror / p }
     } else {
-        Bsdf::Plastic(Plastic { base: plastic.base / (1.0 - p), ..plastic })
+        Plastic { base: plastic.base / (1.0 - p), ..plastic }.bsdf()
     }
 }
