@@ -383,3 +383,43 @@ fn an_emissive_texture_glows_as_its_texels_say() {
     let (bright, dark) = (columns[0].max(columns[1]), columns[0].min(columns[1]));
     assert!((bright / 2.0 - 1.0).abs() < 0.02 && dark < 1e-3, "columns {columns:?}");
 }
+
+/// A white base under a clear coat (Cycles' layering: what the coat reflects is taken from the
+/// layers under it) reflects all the light it receives, smooth or rough: in a white world of
+/// radiance 1 it vanishes (2%).
+#[test]
+fn a_clear_coated_white_sphere_vanishes_in_a_white_furnace() {
+    let dir = tempfile::tempdir().unwrap();
+    for roughness in [0.0, 0.3] {
+        let material = json!({"pbrMetallicRoughness": {"baseColorFactor": [1.0, 1.0, 1.0, 1.0],
+            "metallicFactor": 0.0, "roughnessFactor": 0.5},
+            "extensions": {"KHR_materials_clearcoat": {"clearcoatFactor": 1.0,
+                "clearcoatRoughnessFactor": roughness}}});
+        let image = sphere_in_a_white_world(dir.path(), material, 0.45, 32);
+        for (c, value) in image.mean(10, 22, 10, 22).iter().enumerate() {
+            assert!((value - 1.0).abs() < 0.02, "coat roughness {roughness}, channel {c}: {value}");
+        }
+    }
+}
+
+/// A smooth clear coat over a black base mirrors the white world with Fresnel's reflectance at
+/// index 1.5, 4% head on, times its factor; the clearcoat texture's red channel scales the
+/// factor (128 / 255: half the reflection). 4% relative tolerance.
+#[test]
+fn a_clear_coat_reflects_its_factor_times_fresnel() {
+    let dir = tempfile::tempdir().unwrap();
+    image::RgbImage::from_pixel(4, 4, image::Rgb([128, 255, 0])).save(dir.path().join("half.png")).unwrap();
+    let black_coated = |coat: Value| {
+        let mut material = diffuse([0.0, 0.0, 0.0]);
+        material["extensions"]["KHR_materials_clearcoat"] = coat;
+        material
+    };
+    let full = json!({"clearcoatFactor": 1.0});
+    let textured = json!({"clearcoatFactor": 1.0, "clearcoatTexture": {"index": 0}});
+    for (coat, images, expected) in [(full, vec![], 0.04), (textured, vec!["half.png"], 0.04 * 128.0 / 255.0)]
+    {
+        let image = ground(dir.path(), black_coated(coat.clone()), &images, Light::WhiteWorld, 8);
+        let seen = image.luminance(8, 24, 8, 24);
+        assert!((seen / expected - 1.0).abs() < 0.04, "{coat}: {seen} vs {expected}");
+    }
+}

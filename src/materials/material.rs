@@ -8,6 +8,7 @@ use std::sync::Arc;
 
 use glam::{Vec3, Vec4};
 
+use super::clearcoat::{Clearcoat, CoatAt, CoatChoice};
 use super::inputs::{NormalMap, SurfaceInputs};
 use super::layer_albedo::{eta_of_f0, f0_of_eta};
 use super::plastic::{self, Coat, Plastic};
@@ -62,6 +63,30 @@ pub struct Material {
     pub thin: bool,
     /// How the base colour's alpha cuts the surface (glTF `alphaMode`).
     pub alpha: Alpha,
+    /// A clear coat over everything (`KHR_materials_clearcoat`).
+    pub clearcoat: Option<Clearcoat>,
+}
+
+/// What a path meets at a surface point: a BSDF in its frame, and the factor on the path's
+/// throughput that choosing it (among a material's layers) carries.
+#[derive(Clone, Copy, Debug)]
+pub struct Lobe {
+    /// The normals the BSDF is expressed in.
+    pub frame: ShadingFrame,
+    /// The BSDF.
+    pub bsdf: Bsdf,
+    /// The factor on the path's throughput.
+    pub weight: f32,
+    /// The coat over it, when the path went under one.
+    under_coat: Option<CoatAt>,
+}
+
+impl Lobe {
+    /// For a photon that arrived from `wo` and scatters toward `wi`: the factor on its flux
+    /// beyond the sample's weight (1 but under a coat: [`CoatAt::importance_correction`]).
+    pub fn importance_correction(&self, wo: Vec3, wi: Vec3) -> f32 {
+        self.under_coat.map_or(1.0, |coat| coat.importance_correction(wo, wi))
+    }
 }
 
 /// glTF `alphaMode` with the alpha it reads: the base colour factor's, times its texture's.
@@ -161,6 +186,7 @@ impl Material {
             emits_both_sides: true,
             thin: false,
             alpha: Alpha::Opaque,
+            clearcoat: None,
         }
     }
 
@@ -231,6 +257,63 @@ impl Material {
         self.thin && self.transmission >= 1.0 && self.ior == Dispersion::Constant(1.0)
     }
 
+    /// What a path arriving from `wo` meets at a surface point whose interpolated frame is
+    /// `frame`, at the wavelengths `lambda`, with `u_lobe` a uniform number that picks a layer or
+    /// lobe where the material has several.
+    #[inline(always)]
+    pub fn lobe(
+        &self,
+        inputs: &SurfaceInputs,
+        frame: ShadingFrame,
+        wo: Vec3,
+        lambda: &Wavelengths,
+        u_lobe: f32,
+    ) -> Lobe {
+        if self.clearcoat.is_some() {
+            return self.coated_lobe(inputs, frame, wo, lambda, u_lobe);
+        }
+        let frame = self.shading_frame(inputs, frame);
+        let bsdf = self.bsdf(inputs, frame.n, wo, lambda, u_lobe);
+        Lobe { frame, bsdf, weight: 1.0, under_coat: None }
+    }
+
+    /// [`Material::lobe`] under a clear coat: alpha first, then the coat or what lies under it.
+    #[inline(never)]
+    fn coated_lobe(
+        &self,
+        inputs: &SurfaceInputs,
+        frame: ShadingFrame,
+        wo: Vec3,
+        lambda: &Wavelengths,
+        u_lobe: f32,
+    ) -> Lobe {
+        let uncoated = |u: f32, weight: f32, under_coat: Option<CoatAt>| {
+            let frame = self.shading_frame(inputs, frame);
+            Lobe { frame, bsdf: self.opaque_bsdf(inputs, frame.n, wo, lambda, u), weight, under_coat }
+        };
+        let Some(u_lobe) = self.alpha_remainder(inputs, u_lobe) else {
+            return Lobe { frame, bsdf: Bsdf::PassThrough, weight: 1.0, under_coat: None };
+        };
+        let Some(coat) = self.clearcoat.as_ref().and_then(|c| c.at(inputs, frame)) else {
+            return uncoated(u_lobe, 1.0, None);
+        };
+        let under = self.reflectance(inputs, lambda).element_sum() / 4.0;
+        match coat.pick(wo, under, u_lobe) {
+            CoatChoice::Coat(bsdf, weight) => Lobe { frame: coat.frame, bsdf, weight, under_coat: None },
+            CoatChoice::Under { weight, u } => uncoated(u, weight, Some(coat)),
+        }
+    }
+
+    /// Where alpha cuts the surface away (`u_lobe` beyond the opacity), `None`; else `u_lobe`
+    /// spread again over [0, 1).
+    fn alpha_remainder(&self, inputs: &SurfaceInputs, u_lobe: f32) -> Option<f32> {
+        if !self.alpha.cuts() {
+            return Some(u_lobe);
+        }
+        let opacity = self.alpha.opacity(inputs);
+        (u_lobe < opacity).then(|| u_lobe / opacity)
+    }
+
     /// The BSDF at a surface point, seen from `wo` at shading normal `n` (the material's
     /// [`Material::shading_frame`]), and the wavelengths `lambda`, with `u_lobe` a uniform number
     /// that picks a lobe where the material mixes several.
@@ -250,21 +333,34 @@ impl Material {
             && self.metallic == 0.0
             && self.emission.is_none()
             && !self.alpha.cuts()
+            && self.clearcoat.is_none()
     }
 
     /// [`Material::bsdf`] where lobes are mixed, layered, emitting or cut away.
     #[inline(never)]
-    fn mixed_bsdf(&self, inputs: &SurfaceInputs, n: Vec3, wo: Vec3, lambda: &Wavelengths, u_lobe: f32) -> Bsdf {
-        let u_lobe = match self.alpha.cuts() {
-            false => u_lobe,
-            true => {
-                let opacity = self.alpha.opacity(inputs);
-                if u_lobe >= opacity {
-                    return Bsdf::PassThrough;
-                }
-                u_lobe / opacity
-            }
-        };
+    fn mixed_bsdf(
+        &self,
+        inputs: &SurfaceInputs,
+        n: Vec3,
+        wo: Vec3,
+        lambda: &Wavelengths,
+        u_lobe: f32,
+    ) -> Bsdf {
+        match self.alpha_remainder(inputs, u_lobe) {
+            Some(u_lobe) => self.opaque_bsdf(inputs, n, wo, lambda, u_lobe),
+            None => Bsdf::PassThrough,
+        }
+    }
+
+    /// The BSDF where the surface is there (alpha left aside).
+    fn opaque_bsdf(
+        &self,
+        inputs: &SurfaceInputs,
+        n: Vec3,
+        wo: Vec3,
+        lambda: &Wavelengths,
+        u_lobe: f32,
+    ) -> Bsdf {
         if u_lobe < self.transmission {
             let ior = self.ior.index(lambda.hero());
             return if self.thin { Bsdf::ThinDielectric { ior } } else { Bsdf::Dielectric { ior } };

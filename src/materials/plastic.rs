@@ -121,6 +121,9 @@ impl Plastic {
         if !self.has_rough_coat() {
             return 0.0;
         }
+        if self.base == Vec4::ZERO {
+            return 1.0;
+        }
         let coat = self.coat.albedo(mu_o);
         share(coat, self.base * (Vec4::ONE - coat)).clamp(0.1, 0.9)
     }

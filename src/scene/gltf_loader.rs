@@ -73,8 +73,11 @@ pub fn load(path: &Path) -> Result<Description, SceneError> {
         .ok_or_else(|| fail("the file has no scene".into()))?;
     let scene_extras: SceneExtras =
         extras::parse(gltf_scene.extras()).map_err(|e| fail(format!("scene extras `caustic`: {e}")))?;
-    let mut materials: Vec<Material> =
-        document.materials().map(|m| material(&m, &images)).collect::<Result<_, _>>().map_err(fail)?;
+    let mut materials: Vec<Material> = document
+        .materials()
+        .map(|m| material(&m, &document, &images))
+        .collect::<Result<_, _>>()
+        .map_err(fail)?;
     let material_offset = materials.len() as u32;
     materials.push(Material::default_grey());
     let rig = rig(&document, &buffers).map_err(fail)?;

@@ -1,21 +1,25 @@
 //! glTF materials into Caustic materials: metallic-roughness, the specular layer, transmission,
 //! the index of refraction and its dispersion law, emission, and the base-colour,
-//! metallic-roughness and normal textures.
+//! metallic-roughness and normal textures, and the clear coat.
 
 use std::sync::Arc;
 
 use glam::Vec3;
 
 use super::extras::{self, MaterialExtras};
-use super::gltf_textures::{decode, info_map, normal_map};
+use super::gltf_textures::{decode, info_map, normal_map, raw_info};
 use gltf::material::AlphaMode;
 
-use crate::materials::{Alpha, BaseColour, Coverage, Material, NormalMap, Specular};
+use crate::materials::{Alpha, BaseColour, Clearcoat, Coverage, Material, NormalMap, Specular};
 use crate::spectrum::{Dispersion, RgbSpectrum};
 use crate::texture::{DataTexture, Texture};
 
 /// A glTF material as a Caustic material.
-pub fn material(m: &gltf::Material, images: &[gltf::image::Data]) -> Result<Material, String> {
+pub fn material(
+    m: &gltf::Material,
+    document: &gltf::Document,
+    images: &[gltf::image::Data],
+) -> Result<Material, String> {
     let name = m.name().unwrap_or("unnamed").to_string();
     let pbr = m.pbr_metallic_roughness();
     let factor = Vec3::from_slice(&pbr.base_color_factor()[..3]);
@@ -60,7 +64,9 @@ pub fn material(m: &gltf::Material, images: &[gltf::image::Data]) -> Result<Mate
     let specular = m
         .specular()
         .map_or((1.0, Vec3::ONE), |s| (s.specular_factor(), Vec3::from(s.specular_color_factor())));
+    let clearcoat = clearcoat(m, document, images).map_err(in_material)?;
     Ok(Material {
+        clearcoat,
         specular: Specular::new(
             m.ior().unwrap_or(1.5),
             specular.0.clamp(0.0, 1.0),
@@ -80,6 +86,47 @@ pub fn material(m: &gltf::Material, images: &[gltf::image::Data]) -> Result<Mate
         emits_both_sides: true,
         thin: false,
     })
+}
+
+/// `KHR_materials_clearcoat` (read raw: the gltf crate does not type it), or `None` without a
+/// coat.
+fn clearcoat(
+    m: &gltf::Material,
+    document: &gltf::Document,
+    images: &[gltf::image::Data],
+) -> Result<Option<Clearcoat>, String> {
+    let Some(value) = m.extension_value("KHR_materials_clearcoat") else {
+        return Ok(None);
+    };
+    let number = |key: &str, default: f64| {
+        let v = value[key].as_f64().unwrap_or(default) as f32;
+        if v.is_finite() {
+            v.clamp(0.0, 1.0)
+        } else {
+            default as f32
+        }
+    };
+    let factor = number("clearcoatFactor", 0.0);
+    if factor <= 0.0 {
+        return Ok(None);
+    }
+    let texture = |key: &str| -> Result<Option<(Arc<DataTexture>, f32)>, String> {
+        let info =
+            raw_info(document, &value[key]).map_err(|e| format!("KHR_materials_clearcoat.{key}: {e}"))?;
+        let Some(info) = info else { return Ok(None) };
+        let Some(map) = info.map else { return Ok(None) };
+        let image = decode(&images[info.texture.source().index()])
+            .map_err(|e| format!("KHR_materials_clearcoat.{key}: {e}"))?;
+        Ok(Some((Arc::new(DataTexture::new(&image, map)), info.scale)))
+    };
+    let texture_only = |key: &str| texture(key).map(|t| t.map(|(texture, _)| texture));
+    Ok(Some(Clearcoat {
+        factor,
+        factor_texture: texture_only("clearcoatTexture")?,
+        roughness: number("clearcoatRoughnessFactor", 0.0),
+        roughness_texture: texture_only("clearcoatRoughnessTexture")?,
+        normal_map: texture("clearcoatNormalTexture")?.map(|(texture, scale)| NormalMap { texture, scale }),
+    }))
 }
 
 /// The material's index against wavelength: the `caustic` extras first, then

@@ -112,6 +112,47 @@ pub fn normal_map(normal: &gltf::material::NormalTexture) -> Option<TextureMap> 
     map(&normal.texture(), normal.tex_coord(), transform)
 }
 
+/// A texture reference the gltf crate does not type (an extension's `...Texture` object).
+pub struct RawInfo<'a> {
+    /// The texture it names.
+    pub texture: gltf::Texture<'a>,
+    /// Where it reads, or `None` on a set Caustic does not carry.
+    pub map: Option<TextureMap>,
+    /// Its `scale` (normal textures'), 1 when absent.
+    pub scale: f32,
+}
+
+/// The reference `value` (absent or null: `None`), its texture looked up in `document`.
+pub fn raw_info<'a>(
+    document: &'a gltf::Document,
+    value: &serde_json::Value,
+) -> Result<Option<RawInfo<'a>>, String> {
+    if value.is_null() {
+        return Ok(None);
+    }
+    let index = value["index"].as_u64().ok_or("a texture reference without a texture index")?;
+    let texture = usize::try_from(index)
+        .ok()
+        .and_then(|i| document.textures().nth(i))
+        .ok_or_else(|| format!("a texture reference to texture {index}, which the file does not have"))?;
+    let transform = value["extensions"].get("KHR_texture_transform").map(raw_transform);
+    let map = map(&texture, raw_set(value), transform);
+    let scale = value["scale"].as_f64().map_or(1.0, |s| s as f32);
+    Ok(Some(RawInfo { texture, map, scale: if scale.is_finite() { scale } else { 1.0 } }))
+}
+
+/// The texture coordinate set the reference `value` reads (its own `texCoord`, without the
+/// transform's override, which [`map`] applies).
+fn raw_set(value: &serde_json::Value) -> u32 {
+    value["texCoord"].as_u64().map_or(0, |s| s.min(u64::from(u32::MAX)) as u32)
+}
+
+/// The texture coordinate set an untyped reference reads, with its transform's override.
+pub fn raw_info_set(value: &serde_json::Value) -> u32 {
+    let transform = value["extensions"].get("KHR_texture_transform").map(raw_transform);
+    transform.and_then(|t| t.set).unwrap_or(raw_set(value))
+}
+
 /// The texture coordinate set a texture reads, with its transform's override.
 pub fn info_set(info: &gltf::texture::Info) -> u32 {
     info.texture_transform().and_then(|t| t.tex_coord()).unwrap_or(info.tex_coord())

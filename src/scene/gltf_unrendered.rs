@@ -4,11 +4,12 @@
 //!
 //! Occlusion textures are not light transport and are ignored without a warning.
 
-use super::gltf_textures::{info_set, normal_set};
+use super::gltf_textures::{info_set, normal_set, raw_info_set};
 use crate::texture::UV_SETS;
 
 /// Material extensions Caustic renders.
 const RENDERED_MATERIAL_EXTENSIONS: &[&str] = &[
+    "KHR_materials_clearcoat",
     "KHR_materials_dispersion",
     "KHR_materials_emissive_strength",
     "KHR_materials_ior",
@@ -47,11 +48,18 @@ fn unrendered_textures(m: &gltf::Material) -> Vec<String> {
         .filter(|(_, present)| *present)
         .map(|(what, _)| format!("its {what} texture is not rendered"))
         .collect();
+    let coat = |key: &str| {
+        let value = m.extension_value("KHR_materials_clearcoat")?.get(key)?;
+        Some(raw_info_set(value))
+    };
     let sets = [
         ("base colour", pbr.base_color_texture().map(|i| info_set(&i))),
         ("metallic-roughness", pbr.metallic_roughness_texture().map(|i| info_set(&i))),
         ("normal", m.normal_texture().map(|n| normal_set(&n))),
         ("emissive", m.emissive_texture().map(|i| info_set(&i))),
+        ("clearcoat", coat("clearcoatTexture")),
+        ("clearcoat roughness", coat("clearcoatRoughnessTexture")),
+        ("clearcoat normal", coat("clearcoatNormalTexture")),
     ];
     for (what, set) in sets {
         if let Some(set) = set.filter(|&s| s as usize >= UV_SETS) {

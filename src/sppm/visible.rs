@@ -10,7 +10,7 @@ use glam::{Vec2, Vec3};
 use super::direct::{DirectLight, DirectTerm};
 use super::renderer::{PassSamples, PassStats, Renderer, VisiblePoint, MAX_DEPTH};
 use crate::geometry::offset_origin;
-use crate::materials::{Bsdf, Transport};
+use crate::materials::{Bsdf, Lobe, Transport};
 use crate::sampling::{pixel_stream, PixelSampler};
 use crate::spectrum::{hero_only, SampledSpectrum};
 
@@ -120,11 +120,12 @@ pub fn continue_eye_path(
         state.radiance +=
             state.beta * material.emitted(&surface.inputs, &pass.wavelengths, surface.frame.ng, wo);
         let rng = &mut state.rng;
-        let frame = material.shading_frame(&surface.inputs, surface.frame);
-        let bsdf = material.bsdf(&surface.inputs, frame.n, wo, &pass.wavelengths, rng.next_1d());
+        let Lobe { frame, bsdf, weight, .. } =
+            material.lobe(&surface.inputs, surface.frame, wo, &pass.wavelengths, rng.next_1d());
         if bsdf == Bsdf::Black {
             break;
         }
+        state.beta *= weight;
         if !bsdf.is_delta() {
             let visible = VisiblePoint {
                 p: surface.p,
