@@ -128,8 +128,7 @@ SUPPORTED_INPUTS = {"Base Color", "Metallic", "Roughness", "IOR", "Transmission 
                     "Emission Strength", "Specular IOR Level"}
 
 # Inputs that change the look when set away from these values, and that Caustic ignores.
-IGNORED_INPUTS = {"Coat Weight": 0.0, "Sheen Weight": 0.0, "Subsurface Weight": 0.0, "Anisotropic": 0.0,
-                  "Alpha": 1.0, "Thin Film Thickness": 0.0}
+IGNORED_INPUTS = {"Sheen Weight": 0.0, "Subsurface Weight": 0.0, "Anisotropic": 0.0, "Thin Film Thickness": 0.0}
 
 
 def material_warnings(material):
@@ -151,8 +150,6 @@ def material_warnings(material):
     transmission = surface.inputs["Transmission Weight"].default_value
     if transmission > 0 and surface.inputs["Roughness"].default_value > 0.05:
         warnings.append(f"material '{material.name}': rough transmission renders as smooth glass")
-    if surface.inputs["Normal"].is_linked:
-        warnings.append(f"material '{material.name}': normal maps are not supported and are ignored")
     return warnings
 
 

@@ -423,3 +423,18 @@ fn a_clear_coat_reflects_its_factor_times_fresnel() {
         assert!((seen / expected - 1.0).abs() < 0.04, "{coat}: {seen} vs {expected}");
     }
 }
+
+/// Under a smooth clear coat, a Lambertian ground lit by a sun keeps what the coat does not
+/// reflect toward the viewer: seen head on, 1 - 0.04 of the uncoated ground's radiance (1%).
+#[test]
+fn a_clear_coat_attenuates_the_base_by_what_it_reflects() {
+    let dir = tempfile::tempdir().unwrap();
+    let s = std::f32::consts::FRAC_1_SQRT_2;
+    let seen = |material: Value| {
+        ground(dir.path(), material, &[], Light::Sun([s, s, 0.0]), 64).luminance(8, 24, 8, 24)
+    };
+    let mut coated = lambert(json!({}));
+    coated["extensions"]["KHR_materials_clearcoat"] = json!({"clearcoatFactor": 1.0});
+    let ratio = seen(coated) / seen(lambert(json!({})));
+    assert!((ratio - 0.96).abs() < 0.01, "{ratio}");
+}

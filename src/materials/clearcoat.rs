@@ -21,7 +21,7 @@ use std::sync::Arc;
 use glam::{Vec3, Vec4};
 
 use super::inputs::{NormalMap, SurfaceInputs};
-use super::plastic::{self, Coat, Plastic};
+use super::plastic::{Coat, Plastic};
 use super::{Bsdf, ShadingFrame, SMOOTH_ROUGHNESS};
 use crate::texture::DataTexture;
 
@@ -106,21 +106,20 @@ impl CoatAt {
         let rest = (1.0 - coat) * under.clamp(0.0, 1.0);
         let p = (coat / (coat + rest).max(1e-6)).clamp(0.05, 0.95);
         if u < p {
-            CoatChoice::Coat(self.bsdf(wo, u / p), self.factor / p)
+            CoatChoice::Coat(self.bsdf(wo), self.factor / p)
         } else {
             let u = ((u - p) / (1.0 - p)).min(1.0 - f32::EPSILON);
             CoatChoice::Under { weight: (1.0 - coat) / (1.0 - p), u }
         }
     }
 
-    /// The coat's own reflection as a BSDF (a mirror when smooth, the microfacet layer over a
-    /// black base when rough), with `u` a uniform number for a choice within it.
-    fn bsdf(&self, wo: Vec3, u: f32) -> Bsdf {
-        let layer = Plastic { base: Vec4::ZERO, coat: self.coat };
-        if self.coat.alpha > 0.0 {
-            return layer.bsdf();
+    /// The coat's own reflection as a BSDF: a mirror when smooth, else the microfacet layer over
+    /// a black base.
+    fn bsdf(&self, wo: Vec3) -> Bsdf {
+        match self.coat.alpha {
+            0.0 => Bsdf::Mirror { weight: self.coat.fresnel(self.frame.n.dot(wo).abs().min(1.0)) },
+            _ => Plastic { base: Vec4::ZERO, coat: self.coat }.bsdf(),
         }
-        plastic::choose_smooth(layer, self.frame.n, wo, u)
     }
 
     /// For a photon that arrived from `wo` and scatters under the coat toward `wi`: the factor

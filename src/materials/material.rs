@@ -12,7 +12,7 @@ use super::clearcoat::{Clearcoat, CoatAt, CoatChoice};
 use super::inputs::{NormalMap, SurfaceInputs};
 use super::layer_albedo::{eta_of_f0, f0_of_eta};
 use super::plastic::{self, Coat, Plastic};
-use super::{Bsdf, ShadingFrame};
+use super::{Bsdf, ShadingFrame, GLOSSY_ALPHA};
 use crate::spectrum::{Dispersion, RgbSpectrum, SampledSpectrum, Wavelengths};
 use crate::texture::{DataTexture, Texture};
 
@@ -259,7 +259,7 @@ impl Material {
 
     /// What a path arriving from `wo` meets at a surface point whose interpolated frame is
     /// `frame`, at the wavelengths `lambda`, with `u_lobe` a uniform number that picks a layer or
-    /// lobe where the material has several.
+    /// lobe where the material has several. A Lambertian material resolves here, without a call.
     #[inline(always)]
     pub fn lobe(
         &self,
@@ -269,17 +269,38 @@ impl Material {
         lambda: &Wavelengths,
         u_lobe: f32,
     ) -> Lobe {
-        if self.clearcoat.is_some() {
-            return self.coated_lobe(inputs, frame, wo, lambda, u_lobe);
+        if self.is_lambertian() {
+            let bsdf = Bsdf::Diffuse { albedo: self.reflectance(inputs, lambda) };
+            return Lobe { frame: self.shading_frame(inputs, frame), bsdf, weight: 1.0, under_coat: None };
         }
-        let frame = self.shading_frame(inputs, frame);
-        let bsdf = self.bsdf(inputs, frame.n, wo, lambda, u_lobe);
-        Lobe { frame, bsdf, weight: 1.0, under_coat: None }
+        self.layered_lobe(inputs, frame, wo, lambda, u_lobe)
     }
 
-    /// [`Material::lobe`] under a clear coat: alpha first, then the coat or what lies under it.
+    /// Whether a visible point can lie on it: whether some lobe of it is gathered at (not glass
+    /// alone, nor a smooth or narrow metal alone). Photons that reach it are stored whichever lobe
+    /// they go on by, since a visible point there picks its own.
+    pub fn gathers_photons(&self) -> bool {
+        let narrow_metal = self.metallic >= 1.0
+            && self.metallic_roughness.is_none()
+            && self.roughness * self.roughness < GLOSSY_ALPHA;
+        self.transmission < 1.0 && !narrow_metal
+    }
+
+    /// Whether it is a Lambertian surface and nothing else (no specular layer, metal, glass,
+    /// emission, alpha or coat), as most are.
+    fn is_lambertian(&self) -> bool {
+        self.specular.is_none()
+            && self.transmission == 0.0
+            && self.metallic == 0.0
+            && self.emission.is_none()
+            && !self.alpha.cuts()
+            && self.clearcoat.is_none()
+    }
+
+    /// [`Material::lobe`] where layers or lobes are mixed: alpha first, then the clear coat or
+    /// what lies under it, then glass, metal or the glTF dielectric BRDF.
     #[inline(never)]
-    fn coated_lobe(
+    fn layered_lobe(
         &self,
         inputs: &SurfaceInputs,
         frame: ShadingFrame,
@@ -287,21 +308,25 @@ impl Material {
         lambda: &Wavelengths,
         u_lobe: f32,
     ) -> Lobe {
-        let uncoated = |u: f32, weight: f32, under_coat: Option<CoatAt>| {
-            let frame = self.shading_frame(inputs, frame);
-            Lobe { frame, bsdf: self.opaque_bsdf(inputs, frame.n, wo, lambda, u), weight, under_coat }
-        };
         let Some(u_lobe) = self.alpha_remainder(inputs, u_lobe) else {
             return Lobe { frame, bsdf: Bsdf::PassThrough, weight: 1.0, under_coat: None };
         };
-        let Some(coat) = self.clearcoat.as_ref().and_then(|c| c.at(inputs, frame)) else {
-            return uncoated(u_lobe, 1.0, None);
+        let coat = self.clearcoat.as_ref().and_then(|c| c.at(inputs, frame));
+        let (u_lobe, coat_weight) = match coat {
+            None => (u_lobe, 1.0),
+            Some(coat) => {
+                let under = self.reflectance(inputs, lambda).element_sum() / 4.0;
+                match coat.pick(wo, under, u_lobe) {
+                    CoatChoice::Coat(bsdf, weight) => {
+                        return Lobe { frame: coat.frame, bsdf, weight, under_coat: None }
+                    }
+                    CoatChoice::Under { weight, u } => (u, weight),
+                }
+            }
         };
-        let under = self.reflectance(inputs, lambda).element_sum() / 4.0;
-        match coat.pick(wo, under, u_lobe) {
-            CoatChoice::Coat(bsdf, weight) => Lobe { frame: coat.frame, bsdf, weight, under_coat: None },
-            CoatChoice::Under { weight, u } => uncoated(u, weight, Some(coat)),
-        }
+        let frame = self.shading_frame(inputs, frame);
+        let (bsdf, weight) = self.opaque_bsdf(inputs, frame.n, wo, lambda, u_lobe);
+        Lobe { frame, bsdf, weight: weight * coat_weight, under_coat: coat }
     }
 
     /// Where alpha cuts the surface away (`u_lobe` beyond the opacity), `None`; else `u_lobe`
@@ -314,45 +339,8 @@ impl Material {
         (u_lobe < opacity).then(|| u_lobe / opacity)
     }
 
-    /// The BSDF at a surface point, seen from `wo` at shading normal `n` (the material's
-    /// [`Material::shading_frame`]), and the wavelengths `lambda`, with `u_lobe` a uniform number
-    /// that picks a lobe where the material mixes several.
-    #[inline(always)]
-    pub fn bsdf(&self, inputs: &SurfaceInputs, n: Vec3, wo: Vec3, lambda: &Wavelengths, u_lobe: f32) -> Bsdf {
-        if self.is_lambertian() {
-            return Bsdf::Diffuse { albedo: self.reflectance(inputs, lambda) };
-        }
-        self.mixed_bsdf(inputs, n, wo, lambda, u_lobe)
-    }
-
-    /// Whether it is a Lambertian surface and nothing else (no specular layer, metal, glass,
-    /// emission or alpha): resolved where the path is traced, with no call, as most are.
-    fn is_lambertian(&self) -> bool {
-        self.specular.is_none()
-            && self.transmission == 0.0
-            && self.metallic == 0.0
-            && self.emission.is_none()
-            && !self.alpha.cuts()
-            && self.clearcoat.is_none()
-    }
-
-    /// [`Material::bsdf`] where lobes are mixed, layered, emitting or cut away.
-    #[inline(never)]
-    fn mixed_bsdf(
-        &self,
-        inputs: &SurfaceInputs,
-        n: Vec3,
-        wo: Vec3,
-        lambda: &Wavelengths,
-        u_lobe: f32,
-    ) -> Bsdf {
-        match self.alpha_remainder(inputs, u_lobe) {
-            Some(u_lobe) => self.opaque_bsdf(inputs, n, wo, lambda, u_lobe),
-            None => Bsdf::PassThrough,
-        }
-    }
-
-    /// The BSDF where the surface is there (alpha left aside).
+    /// The BSDF where the surface is there (alpha and coat left aside), at shading normal `n`,
+    /// and the factor on the path's throughput its choice carries.
     fn opaque_bsdf(
         &self,
         inputs: &SurfaceInputs,
@@ -360,34 +348,32 @@ impl Material {
         wo: Vec3,
         lambda: &Wavelengths,
         u_lobe: f32,
-    ) -> Bsdf {
+    ) -> (Bsdf, f32) {
         if u_lobe < self.transmission {
             let ior = self.ior.index(lambda.hero());
-            return if self.thin { Bsdf::ThinDielectric { ior } } else { Bsdf::Dielectric { ior } };
+            return (if self.thin { Bsdf::ThinDielectric { ior } } else { Bsdf::Dielectric { ior } }, 1.0);
         }
         let reflectance = self.reflectance(inputs, lambda);
         let (metallic, roughness) = self.metallic_roughness(inputs);
         let u_lobe = (u_lobe - self.transmission) / (1.0 - self.transmission);
-        let alpha = roughness * roughness;
+        let alpha = if roughness < SMOOTH_ROUGHNESS { 0.0 } else { roughness * roughness };
         if u_lobe < metallic {
-            if roughness < SMOOTH_ROUGHNESS {
-                return Bsdf::Conductor { f0: reflectance };
+            if alpha == 0.0 {
+                return (Bsdf::Conductor { f0: reflectance }, 1.0);
             }
-            return Bsdf::RoughConductor { f0: reflectance, alpha };
+            return (Bsdf::RoughConductor { f0: reflectance, alpha }, 1.0);
         }
         if self.emission.is_some() && reflectance == Vec4::ZERO {
-            return Bsdf::Black;
+            return (Bsdf::Black, 1.0);
         }
         let Some(specular) = &self.specular else {
-            return Bsdf::Diffuse { albedo: reflectance };
+            return (Bsdf::Diffuse { albedo: reflectance }, 1.0);
         };
         let u_lobe = (u_lobe - metallic) / (1.0 - metallic);
-        let smooth = roughness < SMOOTH_ROUGHNESS;
-        let plastic =
-            Plastic { base: reflectance, coat: specular.coat(lambda, if smooth { 0.0 } else { alpha }) };
-        if smooth {
-            return plastic::choose_smooth(plastic, n, wo, u_lobe);
+        let plastic = Plastic { base: reflectance, coat: specular.coat(lambda, alpha) };
+        if alpha < GLOSSY_ALPHA {
+            return plastic::choose_layer(plastic, n, wo, u_lobe);
         }
-        plastic.bsdf()
+        (plastic.bsdf(), 1.0)
     }
 }

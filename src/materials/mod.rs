@@ -31,6 +31,10 @@ pub use layer_albedo::{eta_of_f0, f0_of_eta};
 pub use material::{Alpha, BaseColour, Coverage, Lobe, Material, Specular, SMOOTH_ROUGHNESS};
 pub use plastic::{Coat, Plastic};
 
+/// GGX lobes narrower than this alpha (roughness 0.316) are not gathered at: eye paths take direct
+/// light there and sample on through them, as through mirrors ([`Bsdf::is_gathered_at`]).
+pub const GLOSSY_ALPHA: f32 = 0.1;
+
 /// A BSDF at a path's wavelengths: reflectances per wavelength, indices at the hero's.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub enum Bsdf {
@@ -120,6 +124,17 @@ impl Bsdf {
                 | Bsdf::ThinDielectric { .. }
                 | Bsdf::PassThrough
         )
+    }
+
+    /// Whether photons are gathered at it: neither a delta lobe nor a narrow GGX one (a metal's, or
+    /// a specular layer's own reflection, below [`GLOSSY_ALPHA`]), through which a density
+    /// estimate would see few photons each weighed by a tall peak, as speckle.
+    pub fn is_gathered_at(&self) -> bool {
+        match *self {
+            Bsdf::RoughConductor { alpha, .. } => alpha >= GLOSSY_ALPHA,
+            Bsdf::Plastic { base, alpha, .. } => base != Vec4::ZERO || alpha >= GLOSSY_ALPHA,
+            _ => !self.is_delta(),
+        }
     }
 
     /// Whether [`Bsdf::sample`] reads its `u_lobe` (a dielectric's choice between reflection and
@@ -397,7 +412,7 @@ mod tests {
             ..Material::default_grey()
         };
         let Bsdf::Plastic { f0, eta, alpha, .. } =
-            default.bsdf(&SurfaceInputs::default(), Vec3::Z, Vec3::Z, &at, 0.5)
+            default.lobe(&SurfaceInputs::default(), FRAME, Vec3::Z, &at, 0.5).bsdf
         else {
             panic!()
         };
@@ -407,7 +422,7 @@ mod tests {
         assert!(head_on > 0.035 && head_on < 0.06 && grazing > 2.0 * head_on, "{head_on} {grazing}");
         let lambert = Material { specular: Specular::new(1.5, 0.0, Vec3::ONE), ..default };
         assert!(matches!(
-            lambert.bsdf(&SurfaceInputs::default(), Vec3::Z, Vec3::Z, &at, 0.5),
+            lambert.lobe(&SurfaceInputs::default(), FRAME, Vec3::Z, &at, 0.5).bsdf,
             Bsdf::Diffuse { .. }
         ));
     }
@@ -417,32 +432,32 @@ mod tests {
         let at = |lambda_nm: f32| Wavelengths::single(lambda_nm, 1.0);
         let glass = Material { transmission: 1.0, roughness: 0.0, ..Material::default_grey() };
         assert_eq!(
-            glass.bsdf(&SurfaceInputs::default(), Vec3::Z, Vec3::Z, &at(550.0), 0.5),
+            glass.lobe(&SurfaceInputs::default(), FRAME, Vec3::Z, &at(550.0), 0.5).bsdf,
             Bsdf::Dielectric { ior: 1.5 }
         );
         assert!(!glass.is_dispersive());
         let flint = Material { ior: Dispersion::glass("SF11").unwrap(), ..glass };
         assert!(flint.is_dispersive());
         let (blue, red) = (
-            flint.bsdf(&SurfaceInputs::default(), Vec3::Z, Vec3::Z, &at(450.0), 0.5),
-            flint.bsdf(&SurfaceInputs::default(), Vec3::Z, Vec3::Z, &at(650.0), 0.5),
+            flint.lobe(&SurfaceInputs::default(), FRAME, Vec3::Z, &at(450.0), 0.5).bsdf,
+            flint.lobe(&SurfaceInputs::default(), FRAME, Vec3::Z, &at(650.0), 0.5).bsdf,
         );
         assert!(
             matches!((blue, red), (Bsdf::Dielectric { ior: b }, Bsdf::Dielectric { ior: r }) if b > r + 0.02)
         );
         let mirror = Material { metallic: 1.0, roughness: 0.0, ..Material::default_grey() };
         assert!(matches!(
-            mirror.bsdf(&SurfaceInputs::default(), Vec3::Z, Vec3::Z, &at(550.0), 0.5),
+            mirror.lobe(&SurfaceInputs::default(), FRAME, Vec3::Z, &at(550.0), 0.5).bsdf,
             Bsdf::Conductor { .. }
         ));
         let rough = Material { metallic: 1.0, roughness: 0.5, ..Material::default_grey() };
         assert!(matches!(
-            rough.bsdf(&SurfaceInputs::default(), Vec3::Z, Vec3::Z, &at(550.0), 0.5),
+            rough.lobe(&SurfaceInputs::default(), FRAME, Vec3::Z, &at(550.0), 0.5).bsdf,
             Bsdf::RoughConductor { alpha: 0.25, .. }
         ));
         let half = Material { metallic: 0.5, ..Material::default_grey() };
         assert!(matches!(
-            half.bsdf(&SurfaceInputs::default(), Vec3::Z, Vec3::Z, &at(550.0), 0.7),
+            half.lobe(&SurfaceInputs::default(), FRAME, Vec3::Z, &at(550.0), 0.7).bsdf,
             Bsdf::Diffuse { .. }
         ));
     }

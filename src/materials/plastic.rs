@@ -11,8 +11,9 @@
 //! within 3% at IOR 1.5 away from grazing). Multiple scattering between microfacets is left out:
 //! with a dielectric's Fresnel it returns under 0.5% of the light at IOR 1.5 and roughness 1.
 //!
-//! A smooth coat is a delta mirror: [`choose_smooth`] picks it or the base once per hit, each with
-//! the share of light it reflects.
+//! A smooth coat is a delta mirror, and a narrow one a lobe that eye paths sample through rather
+//! than gather photons in: [`choose_layer`] picks it or the base once per hit, each with the share
+//! of light it reflects.
 
 use std::f32::consts::FRAC_1_PI;
 
@@ -187,15 +188,22 @@ impl Plastic {
     }
 }
 
-/// Under a smooth coat, the coat's mirror or the base, picked by `u` with their shares of the
-/// light reflected toward `wo` (at shading normal `n`), each weighted by one over its probability.
-pub fn choose_smooth(plastic: Plastic, n: Vec3, wo: Vec3, u: f32) -> Bsdf {
+/// Under a smooth or narrow coat (GGX alpha below [`super::GLOSSY_ALPHA`]), the coat's own
+/// reflection or the base, picked by `u` with their shares of the light reflected toward `wo` (at
+/// shading normal `n`), each weighted by one over its probability: the BSDF and the factor on the
+/// path's throughput. The base alone is attenuated as under a smooth coat (the directional albedo
+/// of so narrow a GGX lobe differs from Fresnel's by under 0.5%).
+pub fn choose_layer(plastic: Plastic, n: Vec3, wo: Vec3, u: f32) -> (Bsdf, f32) {
     let mu_o = n.dot(wo).abs().min(1.0);
-    let mirror = plastic.coat.fresnel(mu_o);
-    let p = share(mirror, plastic.base * (Vec4::ONE - plastic.coat.albedo(mu_o)));
+    let smooth = plastic.coat.alpha == 0.0;
+    let coat = if smooth { plastic.coat.fresnel(mu_o) } else { plastic.coat.albedo(mu_o) };
+    let p = share(coat, plastic.base * (Vec4::ONE - plastic.coat.albedo(mu_o)));
     if u < p {
-        Bsdf::Mirror { weight: mirror / p }
-    } else {
-        Plastic { base: plastic.base / (1.0 - p), ..plastic }.bsdf()
+        if smooth {
+            return (Bsdf::Mirror { weight: coat / p }, 1.0);
+        }
+        return (Plastic { base: Vec4::ZERO, ..plastic }.bsdf(), 1.0 / p);
     }
+    let coat = Coat { alpha: 0.0, ..plastic.coat };
+    (Plastic { base: plastic.base / (1.0 - p), coat }.bsdf(), 1.0)
 }

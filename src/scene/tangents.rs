@@ -58,7 +58,7 @@ pub fn with_generated_tangents(mesh: &MeshInstance, set: usize) -> Option<MeshIn
     let uvs = if set == 0 { &mesh.uvs } else { &mesh.extras.uvs1 };
     // Texture coordinates that are all one point (none in the file) span no tangent plane.
     let spans = uvs.first().is_some_and(|first| uvs.iter().any(|uv| uv != first));
-    if uvs.len() != mesh.positions.len() || !spans || mesh.normals.iter().any(|n| *n == Vec3::ZERO) {
+    if uvs.len() != mesh.positions.len() || !spans || mesh.normals.contains(&Vec3::ZERO) {
         return None;
     }
     let mut corners = Corners { mesh, uvs, tangents: vec![Vec4::ZERO; 3 * mesh.triangles.len()] };

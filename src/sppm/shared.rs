@@ -20,11 +20,12 @@ use std::ops::Range;
 use glam::Vec3;
 use rayon::prelude::*;
 
+use super::direct::ShadowRay;
 use super::gather::{sum_over, FirstRound, PhotonSet, PhotonSums};
 use super::photons::{continue_photon, photon_chunks, start_photon, trace_photon, Photon, PhotonState};
 use super::renderer::{collect_counting, PassSamples, PassStats, PixelEstimate, Renderer};
 use super::visible::{
-    continue_eye_path, start_eye_path, trace_eye_path, with_direct, EyeEnd, EyeResult, EyeState,
+    continue_eye_path, start_eye_path, trace_eye_path, with_direct, EyeEnd, EyeEvent, EyeResult, EyeState,
 };
 use crate::geometry::ray_meets_box;
 use crate::spectrum::SampledSpectrum;
@@ -45,18 +46,20 @@ impl Swept {
         }))
     }
 
-    /// Whether the segment could meet a moving triangle in some frame.
-    fn meets(self, origin: Vec3, direction: Vec3, t_max: f32) -> bool {
-        self.0.is_some_and(|b| ray_meets_box(origin, direction, t_max, b))
+    /// Whether the ray could meet a moving triangle in some frame.
+    fn meets(self, ray: ShadowRay) -> bool {
+        self.0.is_some_and(|b| ray_meets_box(ray.origin, ray.direction, ray.t_max, b))
     }
 }
 
 /// A segment of a shared path that meets the swept box.
 struct Watched<S> {
-    /// The path's state as the segment starts.
+    /// The path's state where a frame whose moving triangles block `ray` resumes it: as the
+    /// segment starts (or, for a shadow ray of direct light on the way, as the path starts).
     state: S,
-    /// The distance to the static triangle it hit (infinite when it left the scene).
-    t_hit: f32,
+    /// The segment, to the static triangle it hit (infinite when it left the scene), or the
+    /// shadow ray.
+    ray: ShadowRay,
     /// Photons the path had stored before it.
     stored_before: usize,
 }
@@ -210,8 +213,9 @@ fn trace_shared_photon(
     }
     let mut watched = Vec::new();
     let stats = continue_photon(statics, pass, state, &mut traced.photons, |state, t_hit, stored_before| {
-        if swept.meets(state.origin, state.direction, t_hit) {
-            watched.push(Watched { state: state.clone(), t_hit, stored_before });
+        let ray = ShadowRay { origin: state.origin, direction: state.direction, t_max: t_hit };
+        if swept.meets(ray) {
+            watched.push(Watched { state: state.clone(), ray, stored_before });
         }
     });
     if !watched.is_empty() {
@@ -236,7 +240,7 @@ fn check_photons(frame: &Renderer, pass: &PassSamples, shared: &SharedPhotons) -
             let mut stats = PassStats::default();
             for w in &record.watched {
                 stats.moving_tests += 1;
-                if frame.accel.moving_occluded(w.state.origin, w.state.direction, w.t_hit) {
+                if frame.accel.moving_occluded(w.ray.origin, w.ray.direction, w.ray.t_max) {
                     stats = stats + continue_photon(frame, pass, w.state.clone(), &mut own, |_, _, _| {});
                     return (w.stored_before, own, stats);
                 }
@@ -281,14 +285,20 @@ fn trace_shared_eyes(statics: &Renderer, pass: &PassSamples, swept: Swept) -> (V
         .with_min_len(64)
         .map(|pixel| {
             let (state, start_stats) = start_eye_path(statics, pass, pixel);
+            let start = state.clone();
             let mut watched = Vec::new();
-            let (end, stats) = continue_eye_path(statics, pass, state, |state, t_hit| {
-                if swept.meets(state.origin, state.direction, t_hit) {
-                    watched.push(Watched { state: state.clone(), t_hit, stored_before: 0 });
+            let (end, stats) = continue_eye_path(statics, pass, state, |event| {
+                let (state, ray) = match event {
+                    EyeEvent::Segment(state, t_hit) => {
+                        (state, ShadowRay { origin: state.origin, direction: state.direction, t_max: t_hit })
+                    }
+                    EyeEvent::Shadow(ray) => (&start, ray),
+                };
+                if swept.meets(ray) {
+                    watched.push(Watched { state: state.clone(), ray, stored_before: 0 });
                 }
             });
-            let direct_watched =
-                end.direct.map(|t| t.ray.is_some_and(|r| swept.meets(r.origin, r.direction, r.t_max)));
+            let direct_watched = end.direct.map(|t| t.ray.is_some_and(|r| swept.meets(r)));
             (EyeRecord { end, watched, direct_watched }, start_stats + stats)
         })
         .collect();
@@ -302,8 +312,8 @@ fn frame_eye(frame: &Renderer, pass: &PassSamples, record: &EyeRecord) -> (EyeRe
     let mut stats = PassStats::default();
     for w in &record.watched {
         stats.moving_tests += 1;
-        if frame.accel.moving_occluded(w.state.origin, w.state.direction, w.t_hit) {
-            let (end, resumed) = continue_eye_path(frame, pass, w.state.clone(), |_, _| {});
+        if frame.accel.moving_occluded(w.ray.origin, w.ray.direction, w.ray.t_max) {
+            let (end, resumed) = continue_eye_path(frame, pass, w.state.clone(), |_| {});
             return (end.result, true, stats + resumed);
         }
     }

@@ -1,13 +1,21 @@
-//! The eye pass (DESIGN.md step 2): a camera ray per pixel, followed through delta bounces to the
-//! first non-delta surface, where direct light is estimated by next-event estimation and a
-//! visible point is left for the photons to be gathered at (direct light: [`DirectLight`]).
+//! The eye pass (DESIGN.md step 2): a camera ray per pixel, followed through delta bounces and
+//! narrow glossy lobes to the first surface photons are gathered at
+//! ([`crate::materials::Bsdf::is_gathered_at`]), where direct light is estimated by next-event
+//! estimation and a visible point is left for the photons (direct light: [`DirectLight`]).
+//!
+//! At a narrow glossy vertex the path takes direct light too (a light sample and a BSDF sample,
+//! by multiple importance sampling: a small light's highlight in a glossy metal or coat is found
+//! either way), then samples on through the lobe; the emission its next segment meets is then
+//! already counted. A density estimate there would weigh each of the few photons the lobe sees
+//! by its tall peak: speckle that lasts long after the rest of the image is clean (pbrt-v4 and
+//! Hachisuka's SPPM notes likewise trace eye paths on through glossy surfaces).
 //!
 //! Like photon paths, an eye path is an [`EyeState`] advanced segment by segment, which a caller
 //! can watch and resume (reuse across frames).
 
 use glam::{Vec2, Vec3};
 
-use super::direct::{DirectLight, DirectTerm};
+use super::direct::{DirectLight, DirectTerm, ShadowRay};
 use super::renderer::{PassSamples, PassStats, Renderer, VisiblePoint, MAX_DEPTH};
 use crate::geometry::offset_origin;
 use crate::materials::{Bsdf, Lobe, Transport};
@@ -38,6 +46,8 @@ pub struct EyeState {
     pub radiance: SampledSpectrum,
     /// Segments traced before this one.
     pub depth: u32,
+    /// The vertex this segment leaves took direct light: emission it meets is already counted.
+    pub lights_sampled: bool,
     /// The path's random stream, where this segment leaves it.
     pub rng: PixelSampler,
 }
@@ -79,6 +89,7 @@ pub fn start_eye_path(renderer: &Renderer, pass: &PassSamples, pixel: usize) -> 
             hero_only: false,
             radiance: SampledSpectrum::ZERO,
             depth: 0,
+            lights_sampled: false,
             rng,
         },
         stats,
@@ -88,18 +99,27 @@ pub fn start_eye_path(renderer: &Renderer, pass: &PassSamples, pixel: usize) -> 
 /// Traces pixel `pixel`'s camera path for `pass`.
 pub fn trace_eye_path(renderer: &Renderer, pass: &PassSamples, pixel: usize) -> (EyeResult, PassStats) {
     let (state, start_stats) = start_eye_path(renderer, pass, pixel);
-    let (end, stats) = continue_eye_path(renderer, pass, state, |_, _| {});
+    let (end, stats) = continue_eye_path(renderer, pass, state, |_| {});
     (end.result, start_stats + stats)
 }
 
-/// Traces an eye path from `state` to its end. Before a segment's hit is shaded, `watch` sees
-/// the state the segment started from and the distance to what it hit (infinite when it left
-/// the scene).
+/// What a caller watching an eye path sees.
+pub enum EyeEvent<'a> {
+    /// Before a segment's hit is shaded: the state the segment started from and the distance to
+    /// what it hit (infinite when it left the scene).
+    Segment(&'a EyeState, f32),
+    /// A ray of direct light taken at a glossy vertex on the way, which must be free for its term
+    /// to count.
+    Shadow(ShadowRay),
+}
+
+/// Traces an eye path from `state` to its end, showing `watch` its segments and the rays of
+/// direct light on the way (those at the visible point are in the [`EyeEnd`]).
 pub fn continue_eye_path(
     renderer: &Renderer,
     pass: &PassSamples,
     mut state: EyeState,
-    mut watch: impl FnMut(&EyeState, f32),
+    mut watch: impl FnMut(EyeEvent),
 ) -> (EyeEnd, PassStats) {
     let scene = renderer.scene;
     let mut stats = PassStats::default();
@@ -109,16 +129,20 @@ pub fn continue_eye_path(
     while state.depth < MAX_DEPTH {
         stats.eye_rays += 1;
         let hit = renderer.accel.intersect(state.origin, state.direction, f32::INFINITY);
-        watch(&state, hit.map_or(f32::INFINITY, |h| h.t));
+        watch(EyeEvent::Segment(&state, hit.map_or(f32::INFINITY, |h| h.t)));
         let Some(hit) = hit else {
-            state.radiance += state.beta * scene.escaped_radiance(state.direction, &pass.wavelengths);
+            if !state.lights_sampled {
+                state.radiance += state.beta * scene.escaped_radiance(state.direction, &pass.wavelengths);
+            }
             break;
         };
         let surface = scene.surface(&hit, &pass.wavelengths);
         let material = &scene.materials[surface.material as usize];
         let wo = -state.direction;
-        state.radiance +=
-            state.beta * material.emitted(&surface.inputs, &pass.wavelengths, surface.frame.ng, wo);
+        if !state.lights_sampled {
+            state.radiance +=
+                state.beta * material.emitted(&surface.inputs, &pass.wavelengths, surface.frame.ng, wo);
+        }
         let rng = &mut state.rng;
         let Lobe { frame, bsdf, weight, .. } =
             material.lobe(&surface.inputs, surface.frame, wo, &pass.wavelengths, rng.next_1d());
@@ -126,22 +150,29 @@ pub fn continue_eye_path(
             break;
         }
         state.beta *= weight;
-        if !bsdf.is_delta() {
-            let visible = VisiblePoint {
-                p: surface.p,
-                frame,
-                wo,
-                bsdf,
-                beta: state.beta,
-                hero_only: state.hero_only,
-                scale: surface.scale,
-            };
-            direct = DirectLight { renderer, wavelengths: &pass.wavelengths, point: &visible }
+        let vertex = VisiblePoint {
+            p: surface.p,
+            frame,
+            wo,
+            bsdf,
+            beta: state.beta,
+            hero_only: state.hero_only,
+            scale: surface.scale,
+        };
+        if bsdf.is_gathered_at() {
+            direct = DirectLight { renderer, wavelengths: &pass.wavelengths, point: &vertex }
                 .estimate(rng, &mut stats);
             radiance_before = state.radiance;
             state.radiance = with_direct(radiance_before, state.beta, direct.map(|t| t.value));
-            point = Some(visible);
+            point = Some(vertex);
             break;
+        }
+        state.lights_sampled = !bsdf.is_delta();
+        if state.lights_sampled {
+            let terms = DirectLight { renderer, wavelengths: &pass.wavelengths, point: &vertex }
+                .estimate(rng, &mut stats);
+            terms.iter().filter_map(|t| t.ray).for_each(|ray| watch(EyeEvent::Shadow(ray)));
+            state.radiance = with_direct(state.radiance, state.beta, terms.map(|t| t.value));
         }
         let u = rng.next_2d();
         let u_lobe = bsdf.lobe_number(|| rng.next_1d());

@@ -194,4 +194,21 @@ def normal_mapped():
     return {"Floor": 1, "Bumpy": 3}
 
 
-SCENES = {"principled_spheres": principled_spheres, "textured": textured, "normal_mapped": normal_mapped}
+def coated():
+    """Two clear-coated spheres on the default floor: a red one under Blender's default coat
+    (weight 1, roughness 0.03: a near mirror over a rough base) and a blue one under half a rough
+    coat (weight 0.5, roughness 0.4)."""
+    clear()
+    studio(principled("Floor", Base_Color=(0.5, 0.5, 0.5, 1.0)))
+    for name, x, colour, weight, roughness, index in (("Red coated", -1.1, (0.6, 0.05, 0.05, 1.0), 1.0, 0.03, 2),
+                                                      ("Blue coated", 1.1, (0.05, 0.1, 0.5, 1.0), 0.5, 0.4, 3)):
+        material = principled(name, Base_Color=colour, Roughness=0.5, Coat_Weight=weight, Coat_Roughness=roughness)
+        add(bpy.ops.mesh.primitive_uv_sphere_add, material, index=index, segments=64, ring_count=32, radius=1.0,
+            location=(x, 0.0, 1.0))
+        bpy.ops.object.shade_smooth()
+    camera((0.0, -7.0, 3.0), (0.0, 0.0, 0.8))
+    return {"Floor": 1, "Red coated": 2, "Blue coated": 3}
+
+
+SCENES = {"principled_spheres": principled_spheres, "textured": textured, "normal_mapped": normal_mapped,
+          "coated": coated}

@@ -113,6 +113,9 @@ class Parity(unittest.TestCase):
     def test_textured(self):
         self.check("textured")
 
+    def test_coated(self):
+        self.check("coated")
+
     # Known gap: Caustic's normal-mapped cube reads 1.3x Cycles' (the normal map's analytic tests
     # in tests/materials.rs pass; the difference with Cycles is not yet found).
     @unittest.expectedFailure
