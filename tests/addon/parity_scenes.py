@@ -15,6 +15,18 @@ import mathutils
 SIZE = 64
 
 
+def interior(index, value):
+    """The pixels of object `value` in an object-index image whose four neighbours are the same
+    object (its rim left out)."""
+    mask = index == value
+    inner = mask.copy()
+    inner[1:, :] &= mask[:-1, :]
+    inner[:-1, :] &= mask[1:, :]
+    inner[:, 1:] &= mask[:, :-1]
+    inner[:, :-1] &= mask[:, 1:]
+    return inner
+
+
 def clear():
     for collection in (bpy.data.objects, bpy.data.meshes, bpy.data.materials, bpy.data.lights, bpy.data.cameras,
                        bpy.data.images, bpy.data.worlds):

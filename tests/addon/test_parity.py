@@ -52,17 +52,6 @@ def read_reference(name):
     return channels["Combined"].pixels.astype(np.float64), channels["Index.X"].pixels
 
 
-def interior(index, value):
-    """The pixels of object `value` whose four neighbours are the same object."""
-    mask = index == value
-    inner = mask.copy()
-    inner[1:, :] &= mask[:-1, :]
-    inner[:-1, :] &= mask[1:, :]
-    inner[:, 1:] &= mask[:, :-1]
-    inner[:, :-1] &= mask[:, 1:]
-    return inner
-
-
 def block_median_difference(image, reference, block=8):
     h, w = reference.shape[:2]
     means = lambda x: (x @ LUMINANCE).reshape(h // block, block, w // block, block).mean(axis=(1, 3))
@@ -94,7 +83,7 @@ class Parity(unittest.TestCase):
         sheet = save_sheet(name, image, reference)
         failures = []
         for obj, value in objects.items():
-            mask = interior(index, value)
+            mask = parity_scenes.interior(index, value)
             self.assertGreater(mask.sum(), 20, f"{name}: '{obj}' covers too few pixels")
             ours, theirs = image[mask].mean(axis=0), reference[mask].mean(axis=0)
             ratio = ours / np.maximum(theirs, 1e-6)
