@@ -79,13 +79,18 @@ pub enum Light {
 pub enum Emission {
     /// The same radiance everywhere, W / (m^2 sr) (times D65).
     Uniform(RgbSpectrum),
-    /// A texture of radiance spectra, read at the texture coordinates of the triangle's corners.
-    Textured {
-        /// The texture, factor and strength baked in.
-        texture: Arc<Texture>,
-        /// Each corner's texture coordinates, one pair per set.
-        uvs: [[Vec2; UV_SETS]; 3],
-    },
+    /// A texture of radiance spectra, read at the texture coordinates of the triangle's corners
+    /// (boxed: every light's size is the largest variant's, and few triangles carry a texture).
+    Textured(Box<TexturedEmission>),
+}
+
+/// An emissive texture on one triangle.
+#[derive(Clone, Debug)]
+pub struct TexturedEmission {
+    /// The texture, factor and strength baked in.
+    pub texture: Arc<Texture>,
+    /// Each corner's texture coordinates, one pair per set.
+    pub uvs: [[Vec2; UV_SETS]; 3],
 }
 
 impl Emission {
@@ -93,7 +98,7 @@ impl Emission {
     fn at(&self, b: Vec2, lambda: &Wavelengths) -> SampledSpectrum {
         match self {
             Emission::Uniform(radiance) => spectral(radiance, lambda),
-            Emission::Textured { texture, uvs } => texture.eval(&corner_mix(uvs, b), lambda.nm) * lambda.d65,
+            Emission::Textured(t) => t.texture.eval(&corner_mix(&t.uvs, b), lambda.nm) * lambda.d65,
         }
     }
 
@@ -102,7 +107,8 @@ impl Emission {
     fn mean_luminance(&self) -> f64 {
         match self {
             Emission::Uniform(radiance) => radiance.luminance(),
-            Emission::Textured { texture, uvs } => {
+            Emission::Textured(t) => {
+                let (texture, uvs) = (&t.texture, &t.uvs);
                 let points = (0..64).map(|i| Vec2::new((i % 8) as f32 + 0.5, (i / 8) as f32 + 0.5) / 8.0);
                 points.map(|u| texture.luminance(&corner_mix(uvs, square_to_triangle(u)))).sum::<f64>() / 64.0
             }

@@ -18,12 +18,13 @@ pub fn vertex_colour(corners: [&RgbSpectrum; 3], w: Vec3, lambda_nm: Vec4) -> Sa
 }
 
 /// A surface point's inputs to its material.
-#[derive(Clone, Copy, Debug, Default)]
+#[derive(Clone, Copy, Debug)]
 pub struct SurfaceInputs {
     /// Texture coordinates, one pair per set (zero where the mesh has no such set).
     pub uv: [Vec2; UV_SETS],
-    /// `COLOR_0` at the path's wavelengths, multiplying the base colour, if the mesh has it.
-    pub colour: Option<SampledSpectrum>,
+    /// `COLOR_0` at the path's wavelengths, multiplying the base colour (1 where the mesh has
+    /// none: a multiplication costs less than a larger struct moved at every hit).
+    pub colour: SampledSpectrum,
     /// World-space tangent (xyz) and handedness (w: the bitangent is `w n x t`); zero where the
     /// mesh has none.
     pub tangent: Vec4,
@@ -37,6 +38,13 @@ pub struct NormalMap {
     pub texture: Arc<DataTexture>,
     /// glTF's `normalTexture.scale`.
     pub scale: f32,
+}
+
+impl Default for SurfaceInputs {
+    /// A point with texture coordinates 0, no vertex colour and no tangent.
+    fn default() -> Self {
+        SurfaceInputs { uv: [Vec2::ZERO; UV_SETS], colour: SampledSpectrum::ONE, tangent: Vec4::ZERO }
+    }
 }
 
 impl NormalMap {

@@ -197,10 +197,7 @@ impl Material {
             BaseColour::Constant(spectrum) => spectrum.eval_lanes(lambda.nm),
             BaseColour::Texture(texture) => texture.eval(&inputs.uv, lambda.nm),
         };
-        match inputs.colour {
-            Some(colour) => base * colour,
-            None => base,
-        }
+        base * inputs.colour
     }
 
     /// Metallic and roughness at a surface point: the factors times the texture's blue and green.

@@ -5,7 +5,7 @@
 use glam::{Mat3, Vec2, Vec3, Vec4};
 
 use crate::materials::{vertex_colour, SurfaceInputs};
-use crate::spectrum::{RgbSpectrum, Wavelengths};
+use crate::spectrum::{RgbSpectrum, SampledSpectrum, Wavelengths};
 
 /// Optional vertex attributes, one entry per vertex or none.
 #[derive(Clone, Debug, Default)]
@@ -56,8 +56,10 @@ impl VertexExtras {
     pub fn inputs(&self, v: [usize; 3], w: Vec3, uv0: Vec2, lambda: &Wavelengths) -> SurfaceInputs {
         let lerp2 = |a: &[Vec2]| a[v[0]] * w.x + a[v[1]] * w.y + a[v[2]] * w.z;
         let uv1 = if self.uvs1.is_empty() { Vec2::ZERO } else { lerp2(&self.uvs1) };
-        let colour =
-            (!self.colours.is_empty()).then(|| vertex_colour(v.map(|i| &self.colours[i]), w, lambda.nm));
+        let colour = match self.colours.is_empty() {
+            true => SampledSpectrum::ONE,
+            false => vertex_colour(v.map(|i| &self.colours[i]), w, lambda.nm),
+        };
         let tangent = if self.tangents.is_empty() {
             Vec4::ZERO
         } else {

@@ -15,7 +15,7 @@ use super::{
 };
 use crate::accel::Bvh;
 use crate::camera::Camera;
-use crate::lights::{BoundingSphere, Emission, EmittingTriangle, Light};
+use crate::lights::{BoundingSphere, Emission, EmittingTriangle, Light, TexturedEmission};
 use crate::materials::Material;
 
 /// A span of glTF time, in seconds, that a render covers (frames and their shutters).
@@ -105,7 +105,7 @@ fn emission(geometry: &Geometry, t: &TriangleRef, material: &Material) -> Option
         None => Emission::Uniform(radiance),
         Some(texture) => {
             let uvs = t.vertices.map(|v| geometry.uvs_at(v as usize));
-            Emission::Textured { texture: texture.clone(), uvs }
+            Emission::Textured(Box::new(TexturedEmission { texture: texture.clone(), uvs }))
         }
     })
 }

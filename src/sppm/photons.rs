@@ -114,7 +114,8 @@ pub fn continue_photon(
         let rng = &mut state.rng;
         let lobe = material.lobe(&surface.inputs, surface.frame, wo, &pass.wavelengths, rng.next_1d());
         let (frame, bsdf) = (lobe.frame, lobe.bsdf);
-        if state.scattered && bsdf != Bsdf::PassThrough && material.gathers_photons() {
+        let lands = bsdf.is_gathered_at() || (bsdf != Bsdf::PassThrough && material.gathers_photons());
+        if state.scattered && lands {
             let ng = if surface.frame.ng.dot(wo) < 0.0 { -surface.frame.ng } else { surface.frame.ng };
             out.push(Photon { p: surface.p, wi: wo, ng, flux: state.flux, hero_only: state.hero_only });
             stats.photons_stored += 1;
