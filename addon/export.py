@@ -3,7 +3,8 @@ the `caustic` extras (docs/extras.md) by the exporter's hooks while Caustic expo
 the sun's angle, the camera's depth of field, the shutter, the frame rate, the resolution (with its
 percentage), the active camera, the world's colour and dispersion.
 
-The hooks change nothing in the user's data: they only add extras to what is being written.
+The hooks change nothing in the user's data: they add extras to what is being written, and
+complete two values of the layers the exporter leaves out (`complete_layers`).
 """
 
 import math
@@ -121,6 +122,25 @@ class glTF2ExportUserExtension:
     def gather_material_hook(self, gltf_material, blender_material, export_settings):
         if _exporting:
             add_extras(gltf_material, material_extras(blender_material))
+            complete_layers(gltf_material, blender_material)
+
+
+def complete_layers(gltf_material, material):
+    """Writes what Blender's glTF exporter leaves out of the layers it exports: the Sheen Weight
+    (it writes the Sheen Tint alone as the sheen's colour) and a Coat Roughness of 0.03 (Blender's
+    default, which it takes for glTF's, 0: a smooth coat)."""
+    surface = principled_node(material)
+    extensions = gltf_material.extensions or {}
+    if surface is None:
+        return
+    sheen = extensions.get("KHR_materials_sheen")
+    weight = surface.inputs["Sheen Weight"]
+    if sheen is not None and "sheenColorFactor" in sheen.extension and not weight.is_linked:
+        sheen.extension["sheenColorFactor"] = [c * weight.default_value for c in sheen.extension["sheenColorFactor"]]
+    coat = extensions.get("KHR_materials_clearcoat")
+    roughness = surface.inputs["Coat Roughness"]
+    if coat is not None and "clearcoatFactor" in coat.extension and not roughness.is_linked:
+        coat.extension.setdefault("clearcoatRoughnessFactor", roughness.default_value)
 
 
 # Principled BSDF inputs Caustic renders (everything else is ignored, with a warning).
@@ -128,15 +148,26 @@ SUPPORTED_INPUTS = {"Base Color", "Metallic", "Roughness", "IOR", "Transmission 
                     "Emission Strength", "Specular IOR Level"}
 
 # Inputs that change the look when set away from these values, and that Caustic ignores.
-IGNORED_INPUTS = {"Sheen Weight": 0.0, "Subsurface Weight": 0.0, "Anisotropic": 0.0, "Thin Film Thickness": 0.0}
+IGNORED_INPUTS = {"Subsurface Weight": 0.0, "Anisotropic": 0.0, "Thin Film Thickness": 0.0}
+
+
+def surface_node(material):
+    """The node that feeds the material's active output's surface, or None."""
+    if material is None or material.node_tree is None:
+        return None
+    output = next((n for n in material.node_tree.nodes if n.type == 'OUTPUT_MATERIAL' and n.is_active_output), None)
+    return output.inputs["Surface"].links[0].from_node if output and output.inputs["Surface"].links else None
+
+
+def principled_node(material):
+    """The Principled BSDF that feeds the material's surface, or None."""
+    surface = surface_node(material)
+    return surface if surface is not None and surface.type == 'BSDF_PRINCIPLED' else None
 
 
 def material_warnings(material):
     """What of `material` Caustic does not render, as sentences."""
-    if material.node_tree is None:
-        return []
-    output = next((n for n in material.node_tree.nodes if n.type == 'OUTPUT_MATERIAL' and n.is_active_output), None)
-    surface = output.inputs["Surface"].links[0].from_node if output and output.inputs["Surface"].links else None
+    surface = surface_node(material)
     if surface is None:
         return []
     if surface.type != 'BSDF_PRINCIPLED':

@@ -85,7 +85,7 @@ fn png_uri(width: u32, height: u32, rgba: [u8; 4]) -> String {
 
 /// A scene with every texture and vertex input Caustic reads: base colour on the second
 /// texture coordinate set through `KHR_texture_transform`, metallic-roughness, a normal map,
-/// a specular layer, a clear coat with its three textures, `COLOR_0`, `TEXCOORD_1` and
+/// a specular layer, a clear coat and a sheen with their textures, `COLOR_0`, `TEXCOORD_1` and
 /// `TANGENT`, under a uniform world.
 fn textured_seed() -> Value {
     let mut gltf = common::GltfBuilder::default();
@@ -104,7 +104,9 @@ fn textured_seed() -> Value {
             "KHR_materials_clearcoat": {"clearcoatFactor": 0.8, "clearcoatTexture": {"index": 1},
                 "clearcoatRoughnessFactor": 0.2, "clearcoatRoughnessTexture": {"index": 1, "texCoord": 1},
                 "clearcoatNormalTexture": {"index": 2, "scale": 0.7,
-                    "extensions": {"KHR_texture_transform": {"rotation": 1.0}}}}}}));
+                    "extensions": {"KHR_texture_transform": {"rotation": 1.0}}}},
+            "KHR_materials_sheen": {"sheenColorFactor": [0.8, 0.6, 0.4], "sheenColorTexture": {"index": 0},
+                "sheenRoughnessFactor": 0.5, "sheenRoughnessTexture": {"index": 1}}}}));
     gltf.mesh_with_uvs("Ground", &quad, &uvs, material);
     gltf.attribute("TEXCOORD_1", &uvs.concat(), 2, "VEC2");
     gltf.attribute("COLOR_0", &[[0.9f32, 0.5, 0.1, 1.0]; 6].concat(), 4, "VEC4");

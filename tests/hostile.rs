@@ -297,15 +297,20 @@ fn hostile_textures_are_refused() {
     }
 }
 
-/// A clear coat's texture that names a texture the file does not have is refused with a message
+/// A clear coat's or a sheen's texture that names a texture the file does not have is refused with a message
 /// naming the material and the reference.
 #[test]
-fn a_clear_coat_texture_that_is_not_there_is_refused() {
+fn a_layer_texture_that_is_not_there_is_refused() {
     let dir = tempfile::tempdir().unwrap();
     let path = furnace_edited(dir.path(), "coat.gltf", |doc| {
         doc["materials"][0]["extensions"] = json!({"KHR_materials_clearcoat": {"clearcoatFactor": 1.0, "clearcoatNormalTexture": {"index": 9}}});
     });
     assert_refused(&path, &["KHR_materials_clearcoat.clearcoatNormalTexture", "texture 9", "does not have"]);
+    let path = furnace_edited(dir.path(), "sheen.gltf", |doc| {
+        doc["materials"][0]["extensions"] = json!({"KHR_materials_sheen": {"sheenColorFactor": [1.0, 1.0, 1.0],
+            "sheenColorTexture": {"index": 4}}});
+    });
+    assert_refused(&path, &["KHR_materials_sheen.sheenColorTexture", "texture 4", "does not have"]);
 }
 
 /// Hostile texture references and attributes render with a warning naming the material or mesh:

@@ -438,3 +438,24 @@ fn a_clear_coat_attenuates_the_base_by_what_it_reflects() {
     let ratio = seen(coated) / seen(lambert(json!({})));
     assert!((ratio - 0.96).abs() < 0.01, "{ratio}");
 }
+
+/// A sheen over a white base (Cycles' layering) reflects all the light it receives: in a white
+/// world it vanishes (2%). Over a black base, the fibres reflect a few percent head on and over
+/// three times as much toward the rim.
+#[test]
+fn a_sheen_vanishes_in_a_white_furnace_and_glows_at_the_rim() {
+    let dir = tempfile::tempdir().unwrap();
+    let sheen = |base: f32| {
+        let mut material = diffuse([base, base, base]);
+        material["extensions"]["KHR_materials_sheen"] =
+            json!({"sheenColorFactor": [1.0, 1.0, 1.0], "sheenRoughnessFactor": 0.5});
+        material
+    };
+    let image = sphere_in_a_white_world(dir.path(), sheen(1.0), 0.45, 32);
+    for (c, value) in image.mean(10, 22, 10, 22).iter().enumerate() {
+        assert!((value - 1.0).abs() < 0.02, "channel {c}: {value}");
+    }
+    let black = sphere_in_a_white_world(dir.path(), sheen(0.0), 0.55, 16);
+    let (centre, rim) = (black.luminance(14, 18, 14, 18), black.luminance(3, 5, 14, 18));
+    assert!(centre > 0.005 && centre < 0.06 && rim > 3.0 * centre, "centre {centre}, rim {rim}");
+}

@@ -4,13 +4,8 @@
 //! As in Cycles' Principled BSDF (and the glTF specification's `fresnel_coat`), the coat reflects
 //! `factor` times its microfacet BRDF, and everything under it is scaled by what the coat does not
 //! reflect toward the viewer, `1 - factor E(wo)`, with `E` the coat's directional albedo
-//! ([`super::layer_albedo`]). A white Lambertian base under any coat therefore reflects exactly
-//! everything. The layers are not summed in one BSDF: a path picks the coat or what lies under it
-//! ([`CoatAt::pick`]) and carries that choice's weight, so a visible point stays one small lobe.
-//!
-//! The attenuation is seen from the camera's side. Photons travel the other way: a photon that
-//! scatters under the coat is re-weighted once its outgoing direction is known
-//! ([`CoatAt::importance_correction`]), so photon and camera paths see the same BSDF.
+//! ([`super::layer_albedo`]), combined with what lies under it as `layering.rs` says. A white
+//! Lambertian base under any coat therefore reflects exactly everything.
 //!
 //! Without a clearcoat normal texture the coat follows the interpolated normal, not the base's
 //! normal map (glTF; Blender 5.0's Cycles likewise reads an unconnected Coat Normal as the
@@ -75,21 +70,6 @@ pub struct CoatAt {
     coat: Coat,
 }
 
-/// Which layer a path meets under a coat, with the factor on its throughput.
-#[derive(Clone, Copy, Debug)]
-pub enum CoatChoice {
-    /// The coat's own reflection: this BSDF (in the coat's frame), times the weight.
-    Coat(Bsdf, f32),
-    /// What lies under the coat, its BSDF times `weight`, with `u` a uniform number left over
-    /// for the choices under it.
-    Under {
-        /// The factor on the path's throughput.
-        weight: f32,
-        /// A uniform number in [0, 1).
-        u: f32,
-    },
-}
-
 impl CoatAt {
     /// The share of light the coat reflects seen from `w` (all of its lobe, delta or not).
     pub fn reflected(&self, w: Vec3) -> f32 {
@@ -98,34 +78,12 @@ impl CoatAt {
         self.factor * albedo.x
     }
 
-    /// Picks the coat or what lies under it, seen from `wo`, by `u`: the coat with probability
-    /// near its share of the light reflected toward `wo`, given `under` (the layers' mean albedo
-    /// under it), each choice weighted by one over its probability.
-    pub fn pick(&self, wo: Vec3, under: f32, u: f32) -> CoatChoice {
-        let coat = self.reflected(wo);
-        let rest = (1.0 - coat) * under.clamp(0.0, 1.0);
-        let p = (coat / (coat + rest).max(1e-6)).clamp(0.05, 0.95);
-        if u < p {
-            CoatChoice::Coat(self.bsdf(wo), self.factor / p)
-        } else {
-            let u = ((u - p) / (1.0 - p)).min(1.0 - f32::EPSILON);
-            CoatChoice::Under { weight: (1.0 - coat) / (1.0 - p), u }
-        }
-    }
-
     /// The coat's own reflection as a BSDF: a mirror when smooth, else the microfacet layer over
     /// a black base.
-    fn bsdf(&self, wo: Vec3) -> Bsdf {
+    pub fn bsdf(&self, wo: Vec3) -> Bsdf {
         match self.coat.alpha {
             0.0 => Bsdf::Mirror { weight: self.coat.fresnel(self.frame.n.dot(wo).abs().min(1.0)) },
             _ => Plastic { base: Vec4::ZERO, coat: self.coat }.bsdf(),
         }
-    }
-
-    /// For a photon that arrived from `wo` and scatters under the coat toward `wi`: the factor
-    /// that turns the attenuation [`CoatAt::pick`] weighed it with (seen from `wo`) into the one
-    /// seen from `wi`, where a camera path would look from.
-    pub fn importance_correction(&self, wo: Vec3, wi: Vec3) -> f32 {
-        (1.0 - self.reflected(wi)) / (1.0 - self.reflected(wo)).max(1e-6)
     }
 }

@@ -8,10 +8,12 @@ use std::sync::Arc;
 
 use glam::{Vec3, Vec4};
 
-use super::clearcoat::{Clearcoat, CoatAt, CoatChoice};
+use super::clearcoat::Clearcoat;
 use super::inputs::{NormalMap, SurfaceInputs};
 use super::layer_albedo::{eta_of_f0, f0_of_eta};
+use super::layering::{self, Choice, Over};
 use super::plastic::{self, Coat, Plastic};
+use super::sheen::Sheen;
 use super::{Bsdf, ShadingFrame, GLOSSY_ALPHA};
 use crate::spectrum::{Dispersion, RgbSpectrum, SampledSpectrum, Wavelengths};
 use crate::texture::{DataTexture, Texture};
@@ -63,8 +65,10 @@ pub struct Material {
     pub thin: bool,
     /// How the base colour's alpha cuts the surface (glTF `alphaMode`).
     pub alpha: Alpha,
-    /// A clear coat over everything (`KHR_materials_clearcoat`).
+    /// A clear coat over everything but the sheen (`KHR_materials_clearcoat`).
     pub clearcoat: Option<Clearcoat>,
+    /// A sheen over everything (`KHR_materials_sheen`).
+    pub sheen: Option<Sheen>,
 }
 
 /// What a path meets at a surface point: a BSDF in its frame, and the factor on the path's
@@ -77,15 +81,15 @@ pub struct Lobe {
     pub bsdf: Bsdf,
     /// The factor on the path's throughput.
     pub weight: f32,
-    /// The coat over it, when the path went under one.
-    under_coat: Option<CoatAt>,
+    /// The layers over it (a sheen, a clear coat) that the path went under.
+    over: [Option<Over>; 2],
 }
 
 impl Lobe {
     /// For a photon that arrived from `wo` and scatters toward `wi`: the factor on its flux
-    /// beyond the sample's weight (1 but under a coat: [`CoatAt::importance_correction`]).
+    /// beyond the sample's weight (1 but under a layer: [`Over::importance_correction`]).
     pub fn importance_correction(&self, wo: Vec3, wi: Vec3) -> f32 {
-        self.under_coat.map_or(1.0, |coat| coat.importance_correction(wo, wi))
+        self.over.iter().flatten().map(|layer| layer.importance_correction(wo, wi)).product()
     }
 }
 
@@ -187,6 +191,7 @@ impl Material {
             thin: false,
             alpha: Alpha::Opaque,
             clearcoat: None,
+            sheen: None,
         }
     }
 
@@ -268,7 +273,7 @@ impl Material {
     ) -> Lobe {
         if self.is_lambertian() {
             let bsdf = Bsdf::Diffuse { albedo: self.reflectance(inputs, lambda) };
-            return Lobe { frame: self.shading_frame(inputs, frame), bsdf, weight: 1.0, under_coat: None };
+            return Lobe { frame: self.shading_frame(inputs, frame), bsdf, weight: 1.0, over: [None; 2] };
         }
         self.layered_lobe(inputs, frame, wo, lambda, u_lobe)
     }
@@ -292,10 +297,12 @@ impl Material {
             && self.emission.is_none()
             && !self.alpha.cuts()
             && self.clearcoat.is_none()
+            && self.sheen.is_none()
     }
 
-    /// [`Material::lobe`] where layers or lobes are mixed: alpha first, then the clear coat or
-    /// what lies under it, then glass, metal or the glTF dielectric BRDF.
+    /// [`Material::lobe`] where layers or lobes are mixed: alpha first, then the sheen or what
+    /// lies under it, then the clear coat or what lies under it (Cycles' order), then glass, metal
+    /// or the glTF dielectric BRDF.
     #[inline(never)]
     fn layered_lobe(
         &self,
@@ -305,25 +312,35 @@ impl Material {
         lambda: &Wavelengths,
         u_lobe: f32,
     ) -> Lobe {
-        let Some(u_lobe) = self.alpha_remainder(inputs, u_lobe) else {
-            return Lobe { frame, bsdf: Bsdf::PassThrough, weight: 1.0, under_coat: None };
+        let Some(mut u) = self.alpha_remainder(inputs, u_lobe) else {
+            return Lobe { frame, bsdf: Bsdf::PassThrough, weight: 1.0, over: [None; 2] };
         };
-        let coat = self.clearcoat.as_ref().and_then(|c| c.at(inputs, frame));
-        let (u_lobe, coat_weight) = match coat {
-            None => (u_lobe, 1.0),
-            Some(coat) => {
-                let under = self.reflectance(inputs, lambda).element_sum() / 4.0;
-                match coat.pick(wo, under, u_lobe) {
-                    CoatChoice::Coat(bsdf, weight) => {
-                        return Lobe { frame: coat.frame, bsdf, weight, under_coat: None }
-                    }
-                    CoatChoice::Under { weight, u } => (u, weight),
+        let (mut weight, mut over) = (1.0, [None; 2]);
+        let shading = self.shading_frame(inputs, frame);
+        let under = || self.reflectance(inputs, lambda).element_sum() / 4.0;
+        if let Some(sheen) = self.sheen.as_ref().and_then(|s| s.at(&inputs.uv, shading, lambda)) {
+            match layering::pick(sheen.reflected(wo), 1.0, under(), u) {
+                Choice::Layer { weight } => {
+                    let bsdf = Bsdf::Sheen { colour: sheen.colour, roughness: sheen.roughness };
+                    return Lobe { frame: shading, bsdf, weight, over };
+                }
+                Choice::Under { weight: w, u: rest } => {
+                    (weight, u, over[0]) = (w, rest, Some(Over::Sheen(sheen)))
                 }
             }
-        };
-        let frame = self.shading_frame(inputs, frame);
-        let (bsdf, weight) = self.opaque_bsdf(inputs, frame.n, wo, lambda, u_lobe);
-        Lobe { frame, bsdf, weight: weight * coat_weight, under_coat: coat }
+        }
+        if let Some(coat) = self.clearcoat.as_ref().and_then(|c| c.at(inputs, frame)) {
+            match layering::pick(coat.reflected(wo), coat.factor, under(), u) {
+                Choice::Layer { weight: w } => {
+                    return Lobe { frame: coat.frame, bsdf: coat.bsdf(wo), weight: weight * w, over };
+                }
+                Choice::Under { weight: w, u: rest } => {
+                    (weight, u, over[1]) = (weight * w, rest, Some(Over::Coat(coat)))
+                }
+            }
+        }
+        let (bsdf, w) = self.opaque_bsdf(inputs, shading.n, wo, lambda, u);
+        Lobe { frame: shading, bsdf, weight: weight * w, over }
     }
 
     /// Where alpha cuts the surface away (`u_lobe` beyond the opacity), `None`; else `u_lobe`

@@ -10,9 +10,9 @@ use super::extras::{self, MaterialExtras};
 use super::gltf_textures::{decode, info_map, normal_map, raw_info};
 use gltf::material::AlphaMode;
 
-use crate::materials::{Alpha, BaseColour, Clearcoat, Coverage, Material, NormalMap, Specular};
+use crate::materials::{Alpha, BaseColour, Clearcoat, Coverage, Material, NormalMap, Sheen, Specular};
 use crate::spectrum::{Dispersion, RgbSpectrum};
-use crate::texture::{DataTexture, Texture};
+use crate::texture::{DataTexture, Rgba, Texture, TextureMap};
 
 /// A glTF material as a Caustic material.
 pub fn material(
@@ -65,8 +65,10 @@ pub fn material(
         .specular()
         .map_or((1.0, Vec3::ONE), |s| (s.specular_factor(), Vec3::from(s.specular_color_factor())));
     let clearcoat = clearcoat(m, document, images).map_err(in_material)?;
+    let sheen = sheen(m, document, images).map_err(in_material)?;
     Ok(Material {
         clearcoat,
+        sheen,
         specular: Specular::new(
             m.ior().unwrap_or(1.5),
             specular.0.clamp(0.0, 1.0),
@@ -95,37 +97,81 @@ fn clearcoat(
     document: &gltf::Document,
     images: &[gltf::image::Data],
 ) -> Result<Option<Clearcoat>, String> {
-    let Some(value) = m.extension_value("KHR_materials_clearcoat") else {
+    const EXTENSION: &str = "KHR_materials_clearcoat";
+    let Some(value) = m.extension_value(EXTENSION) else {
         return Ok(None);
     };
-    let number = |key: &str, default: f64| {
-        let v = value[key].as_f64().unwrap_or(default) as f32;
-        if v.is_finite() {
-            v.clamp(0.0, 1.0)
-        } else {
-            default as f32
-        }
-    };
-    let factor = number("clearcoatFactor", 0.0);
+    let factor = unit_factor(value, "clearcoatFactor", 0.0);
     if factor <= 0.0 {
         return Ok(None);
     }
-    let texture = |key: &str| -> Result<Option<(Arc<DataTexture>, f32)>, String> {
-        let info =
-            raw_info(document, &value[key]).map_err(|e| format!("KHR_materials_clearcoat.{key}: {e}"))?;
-        let Some(info) = info else { return Ok(None) };
-        let Some(map) = info.map else { return Ok(None) };
-        let image = decode(&images[info.texture.source().index()])
-            .map_err(|e| format!("KHR_materials_clearcoat.{key}: {e}"))?;
-        Ok(Some((Arc::new(DataTexture::new(&image, map)), info.scale)))
+    let texture = |key: &str| {
+        let texture = raw_texture(EXTENSION, value, key, document, images)?;
+        Ok::<_, String>(texture.map(|(image, map, scale)| (Arc::new(DataTexture::new(&image, map)), scale)))
     };
     let texture_only = |key: &str| texture(key).map(|t| t.map(|(texture, _)| texture));
     Ok(Some(Clearcoat {
         factor,
         factor_texture: texture_only("clearcoatTexture")?,
-        roughness: number("clearcoatRoughnessFactor", 0.0),
+        roughness: unit_factor(value, "clearcoatRoughnessFactor", 0.0),
         roughness_texture: texture_only("clearcoatRoughnessTexture")?,
         normal_map: texture("clearcoatNormalTexture")?.map(|(texture, scale)| NormalMap { texture, scale }),
+    }))
+}
+
+/// An extension's texture reference `key` in `value`: its decoded image and where it reads, or
+/// `None` when absent or on a texture coordinate set Caustic does not carry (warned).
+fn raw_texture(
+    extension: &str,
+    value: &serde_json::Value,
+    key: &str,
+    document: &gltf::Document,
+    images: &[gltf::image::Data],
+) -> Result<Option<(Rgba, TextureMap, f32)>, String> {
+    let in_key = |e: String| format!("{extension}.{key}: {e}");
+    let Some(info) = raw_info(document, &value[key]).map_err(in_key)? else { return Ok(None) };
+    let Some(map) = info.map else { return Ok(None) };
+    let image = decode(&images[info.texture.source().index()]).map_err(in_key)?;
+    Ok(Some((image, map, info.scale)))
+}
+
+/// A factor in [0, 1] at `key` in `value`, `default` when absent or not a finite number.
+fn unit_factor(value: &serde_json::Value, key: &str, default: f32) -> f32 {
+    match value[key].as_f64().map(|v| v as f32) {
+        Some(v) if v.is_finite() => v.clamp(0.0, 1.0),
+        _ => default,
+    }
+}
+
+/// `KHR_materials_sheen` (read raw), or `None` without a sheen or with a black one.
+fn sheen(
+    m: &gltf::Material,
+    document: &gltf::Document,
+    images: &[gltf::image::Data],
+) -> Result<Option<Sheen>, String> {
+    const EXTENSION: &str = "KHR_materials_sheen";
+    let Some(value) = m.extension_value(EXTENSION) else {
+        return Ok(None);
+    };
+    let factor = Vec3::from_array([0, 1, 2].map(|i| {
+        let v = value["sheenColorFactor"][i].as_f64().unwrap_or(0.0) as f32;
+        if v.is_finite() {
+            v.clamp(0.0, 1.0)
+        } else {
+            0.0
+        }
+    }));
+    if factor.max_element() <= 0.0 {
+        return Ok(None);
+    }
+    let texture = |key: &str| raw_texture(EXTENSION, value, key, document, images);
+    Ok(Some(Sheen {
+        colour: RgbSpectrum::reflectance(factor),
+        colour_texture: texture("sheenColorTexture")?
+            .map(|(image, map, _)| Arc::new(Texture::reflectance(&image, map, factor))),
+        roughness: unit_factor(value, "sheenRoughnessFactor", 0.0),
+        roughness_texture: texture("sheenRoughnessTexture")?
+            .map(|(image, map, _)| Arc::new(DataTexture::new(&image, map))),
     }))
 }
 

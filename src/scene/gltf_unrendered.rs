@@ -13,6 +13,7 @@ const RENDERED_MATERIAL_EXTENSIONS: &[&str] = &[
     "KHR_materials_dispersion",
     "KHR_materials_emissive_strength",
     "KHR_materials_ior",
+    "KHR_materials_sheen",
     "KHR_materials_specular",
     "KHR_materials_transmission",
 ];
@@ -48,10 +49,8 @@ fn unrendered_textures(m: &gltf::Material) -> Vec<String> {
         .filter(|(_, present)| *present)
         .map(|(what, _)| format!("its {what} texture is not rendered"))
         .collect();
-    let coat = |key: &str| {
-        let value = m.extension_value("KHR_materials_clearcoat")?.get(key)?;
-        Some(raw_info_set(value))
-    };
+    let raw = |extension: &str, key: &str| Some(raw_info_set(m.extension_value(extension)?.get(key)?));
+    let coat = |key: &str| raw("KHR_materials_clearcoat", key);
     let sets = [
         ("base colour", pbr.base_color_texture().map(|i| info_set(&i))),
         ("metallic-roughness", pbr.metallic_roughness_texture().map(|i| info_set(&i))),
@@ -60,6 +59,8 @@ fn unrendered_textures(m: &gltf::Material) -> Vec<String> {
         ("clearcoat", coat("clearcoatTexture")),
         ("clearcoat roughness", coat("clearcoatRoughnessTexture")),
         ("clearcoat normal", coat("clearcoatNormalTexture")),
+        ("sheen colour", raw("KHR_materials_sheen", "sheenColorTexture")),
+        ("sheen roughness", raw("KHR_materials_sheen", "sheenRoughnessTexture")),
     ];
     for (what, set) in sets {
         if let Some(set) = set.filter(|&s| s as usize >= UV_SETS) {

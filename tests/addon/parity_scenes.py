@@ -222,5 +222,25 @@ def coated():
     return {"Floor": 1, "Red coated": 2, "Blue coated": 3}
 
 
+def sheen():
+    """A velvet cushion (a flattened sphere, dark red, Sheen Weight 1, roughness 0.5) beside a grey
+    ball with a faint pale-blue sheen (weight 0.5, roughness 0.3)."""
+    clear()
+    studio(principled("Floor", Base_Color=(0.5, 0.5, 0.5, 1.0)))
+    velvet = principled("Velvet", Base_Color=(0.3, 0.03, 0.05, 1.0), Roughness=0.8, Sheen_Weight=1.0,
+                        Sheen_Roughness=0.5)
+    cushion = add(bpy.ops.mesh.primitive_uv_sphere_add, velvet, index=2, segments=64, ring_count=32, radius=1.0,
+                  location=(-1.1, 0.0, 0.45))
+    cushion.scale = (1.0, 1.0, 0.45)
+    bpy.ops.object.shade_smooth()
+    dusty = principled("Dusty", Base_Color=(0.4, 0.4, 0.4, 1.0), Roughness=0.6, Sheen_Weight=0.5,
+                       Sheen_Roughness=0.3, Sheen_Tint=(0.7, 0.8, 1.0, 1.0))
+    add(bpy.ops.mesh.primitive_uv_sphere_add, dusty, index=3, segments=64, ring_count=32, radius=0.8,
+        location=(1.1, 0.0, 0.8))
+    bpy.ops.object.shade_smooth()
+    camera((0.0, -7.0, 3.0), (0.0, 0.0, 0.6))
+    return {"Floor": 1, "Velvet": 2, "Dusty": 3}
+
+
 SCENES = {"principled_spheres": principled_spheres, "textured": textured, "normal_mapped": normal_mapped,
-          "coated": coated}
+          "coated": coated, "sheen": sheen}

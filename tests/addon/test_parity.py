@@ -105,6 +105,13 @@ class Parity(unittest.TestCase):
     def test_coated(self):
         self.check("coated")
 
+    # Known gap: Caustic renders sheen with the glTF specification's Charlie model; Cycles 5.0 with
+    # its microfiber model, which reflects less: the velvet cushion reads 1.18x (red) to 1.7x (green,
+    # where the sheen dominates) Cycles'. The faint sheen on the grey ball agrees within 3.5%.
+    @unittest.expectedFailure
+    def test_sheen(self):
+        self.check("sheen")
+
     # Known gap: Caustic's normal-mapped cube reads 1.3x Cycles' (the normal map's analytic tests
     # in tests/materials.rs pass; the difference with Cycles is not yet found).
     @unittest.expectedFailure
