@@ -242,5 +242,38 @@ def sheen():
     return {"Floor": 1, "Velvet": 2, "Dusty": 3}
 
 
+def leaf_material():
+    """A green leaf: an elliptic image alpha rounded to 0 or 1 by a Math node (what Blender's glTF
+    exporter writes as alphaMode MASK)."""
+    m = principled("Leaf", Roughness=0.7)
+    nodes, links = m.node_tree.nodes, m.node_tree.links
+
+    def texel(x, y):
+        u, v = (x + 0.5) / 32 - 0.5, (y + 0.5) / 32 - 0.5
+        return (0.1, 0.45, 0.08, 1.0 if (u / 0.45) ** 2 + (v / 0.22) ** 2 < 1 else 0.0)
+
+    tex = texture_node(m, image("leaf", 32, 32, texel))
+    tex.interpolation = 'Closest'
+    cut = nodes.new("ShaderNodeMath")
+    cut.operation = 'ROUND'
+    links.new(tex.outputs["Color"], nodes["Principled BSDF"].inputs["Base Color"])
+    links.new(tex.outputs["Alpha"], cut.inputs[0])
+    links.new(cut.outputs[0], nodes["Principled BSDF"].inputs["Alpha"])
+    return m
+
+
+def leaf():
+    """An alpha-clipped leaf held over the floor under a small area light: the leaf's shape, and
+    its shadow's, on the floor."""
+    clear()
+    add(bpy.ops.mesh.primitive_plane_add, principled("Floor", Base_Color=(0.5, 0.5, 0.5, 1.0)), index=1, size=20)
+    world((0.05, 0.05, 0.05))
+    area_light((0.5, -1.0, 5.0), (0.0, 0.0, 0.0), 0.3, 300.0)
+    blade = add(bpy.ops.mesh.primitive_plane_add, leaf_material(), index=2, size=2.4, location=(0.0, 0.0, 1.0))
+    blade.rotation_euler = (math.radians(20), 0.0, math.radians(25))
+    camera((0.0, -6.0, 4.0), (0.0, 0.0, 0.4))
+    return {"Floor": 1, "Leaf": 2}
+
+
 SCENES = {"principled_spheres": principled_spheres, "textured": textured, "normal_mapped": normal_mapped,
-          "coated": coated, "sheen": sheen}
+          "coated": coated, "sheen": sheen, "leaf": leaf}
