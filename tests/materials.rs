@@ -459,3 +459,29 @@ fn a_sheen_vanishes_in_a_white_furnace_and_glows_at_the_rim() {
     let (centre, rim) = (black.luminance(14, 18, 14, 18), black.luminance(3, 5, 14, 18));
     assert!(centre > 0.005 && centre < 0.06 && rim > 3.0 * centre, "centre {centre}, rim {rim}");
 }
+
+/// The specular textures scale the layer: `specularTexture`'s alpha its factor (128 / 255: half
+/// the reflection) and `specularColorTexture` its colour (a pure red one reflects red alone, as much
+/// as the smooth spectrum nearest pure red does: 89%). A black smooth ground under a white world
+/// shows its layer alone: 4% head on (4%).
+#[test]
+fn the_specular_textures_scale_the_layer() {
+    let dir = tempfile::tempdir().unwrap();
+    image::RgbaImage::from_pixel(4, 4, image::Rgba([255, 255, 255, 128]))
+        .save(dir.path().join("half.png"))
+        .unwrap();
+    image::RgbImage::from_pixel(4, 4, image::Rgb([255, 0, 0])).save(dir.path().join("red.png")).unwrap();
+    let black_glossy = |specular: Value| {
+        json!({"pbrMetallicRoughness": {"baseColorFactor": [0.0, 0.0, 0.0, 1.0], "metallicFactor": 0.0,
+            "roughnessFactor": 0.0}, "extensions": {"KHR_materials_specular": specular}})
+    };
+    let seen = |specular: Value, images: &[&str]| {
+        ground(dir.path(), black_glossy(specular), images, Light::WhiteWorld, 8).mean(8, 24, 8, 24)
+    };
+    let plain = seen(json!({}), &[]);
+    assert!((plain[1] / 0.04 - 1.0).abs() < 0.04, "{plain:?}");
+    let half = seen(json!({"specularTexture": {"index": 0}}), &["half.png"]);
+    assert!((half[1] / plain[1] - 128.0 / 255.0).abs() < 0.02, "{half:?} vs {plain:?}");
+    let red = seen(json!({"specularColorTexture": {"index": 0}}), &["red.png"]);
+    assert!(red[0] > 0.85 * plain[0] && red[1].abs() < 0.05 * plain[1], "{red:?} vs {plain:?}");
+}

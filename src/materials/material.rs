@@ -147,7 +147,7 @@ impl Alpha {
 }
 
 /// A non-metal's specular layer as the file gives it: `KHR_materials_specular` over the index.
-#[derive(Clone, Debug, PartialEq)]
+#[derive(Clone, Debug)]
 pub struct Specular {
     /// Normal-incidence reflectance at its colour's brightest: the index's, times the specular
     /// factor and the colour's largest component (Blender folds a Specular IOR Level above 0.5
@@ -155,6 +155,10 @@ pub struct Specular {
     pub f0: f32,
     /// The colour's hue (its largest component 1), tinting `f0` but not grazing reflection.
     pub tint: RgbSpectrum,
+    /// `specularTexture`: its alpha channel scales the factor.
+    pub factor_texture: Option<Arc<DataTexture>>,
+    /// `specularColorTexture` (sRGB): it multiplies the colour.
+    pub colour_texture: Option<Arc<Texture>>,
 }
 
 impl Specular {
@@ -163,12 +167,26 @@ impl Specular {
     pub fn new(ior: f32, factor: f32, colour: Vec3) -> Option<Self> {
         let scale = colour.max_element();
         let f0 = (f0_of_eta(ior) * factor * scale).min(0.99);
-        (f0 > 0.0).then(|| Specular { f0, tint: RgbSpectrum::reflectance(colour / scale) })
+        (f0 > 0.0).then(|| Specular {
+            f0,
+            tint: RgbSpectrum::reflectance(colour / scale),
+            factor_texture: None,
+            colour_texture: None,
+        })
     }
 
-    /// The coat at the wavelengths `lambda` with GGX `alpha` (0: smooth).
-    fn coat(&self, lambda: &Wavelengths, alpha: f32) -> Coat {
-        Coat::new(self.tint.eval_lanes(lambda.nm) * self.f0, eta_of_f0(self.f0), alpha)
+    /// The coat at a surface point's inputs, the wavelengths `lambda`, with GGX `alpha` (0:
+    /// smooth).
+    fn coat(&self, inputs: &SurfaceInputs, lambda: &Wavelengths, alpha: f32) -> Coat {
+        let mut tint = self.tint.eval_lanes(lambda.nm);
+        let mut f0 = self.f0;
+        if let Some(texture) = &self.factor_texture {
+            f0 *= texture.eval(&inputs.uv).w;
+        }
+        if let Some(texture) = &self.colour_texture {
+            tint *= texture.eval(&inputs.uv, lambda.nm);
+        }
+        Coat::new(tint * f0, eta_of_f0(f0.max(1e-6)), alpha)
     }
 }
 
@@ -384,7 +402,7 @@ impl Material {
             return (Bsdf::Diffuse { albedo: reflectance }, 1.0);
         };
         let u_lobe = (u_lobe - metallic) / (1.0 - metallic);
-        let plastic = Plastic { base: reflectance, coat: specular.coat(lambda, alpha) };
+        let plastic = Plastic { base: reflectance, coat: specular.coat(inputs, lambda, alpha) };
         if alpha < GLOSSY_ALPHA {
             return plastic::choose_layer(plastic, n, wo, u_lobe);
         }

@@ -61,19 +61,13 @@ pub fn material(
         }
         _ => None,
     };
-    let specular = m
-        .specular()
-        .map_or((1.0, Vec3::ONE), |s| (s.specular_factor(), Vec3::from(s.specular_color_factor())));
+    let specular = specular(m, &image)?;
     let clearcoat = clearcoat(m, document, images).map_err(in_material)?;
     let sheen = sheen(m, document, images).map_err(in_material)?;
     Ok(Material {
         clearcoat,
         sheen,
-        specular: Specular::new(
-            m.ior().unwrap_or(1.5),
-            specular.0.clamp(0.0, 1.0),
-            specular.1.max(Vec3::ZERO),
-        ),
+        specular,
         name,
         base_colour,
         metallic_roughness,
@@ -88,6 +82,30 @@ pub fn material(
         emits_both_sides: true,
         thin: false,
     })
+}
+
+/// The specular layer: the index with `KHR_materials_specular`'s factor and colour and their
+/// textures (`image` decodes a texture's image), or `None` for a factor of 0.
+fn specular(
+    m: &gltf::Material,
+    image: &dyn Fn(gltf::Texture) -> Result<Rgba, String>,
+) -> Result<Option<Specular>, String> {
+    let ext = m.specular();
+    let factor = ext.as_ref().map_or(1.0, |s| s.specular_factor()).clamp(0.0, 1.0);
+    let colour = ext.as_ref().map_or(Vec3::ONE, |s| Vec3::from(s.specular_color_factor())).max(Vec3::ZERO);
+    let Some(mut layer) = Specular::new(m.ior().unwrap_or(1.5), factor, colour) else {
+        return Ok(None);
+    };
+    let Some(ext) = ext else {
+        return Ok(Some(layer));
+    };
+    if let Some((map, info)) = ext.specular_texture().and_then(|i| Some((info_map(&i)?, i))) {
+        layer.factor_texture = Some(Arc::new(DataTexture::new(&image(info.texture())?, map)));
+    }
+    if let Some((map, info)) = ext.specular_color_texture().and_then(|i| Some((info_map(&i)?, i))) {
+        layer.colour_texture = Some(Arc::new(Texture::reflectance(&image(info.texture())?, map, Vec3::ONE)));
+    }
+    Ok(Some(layer))
 }
 
 /// `KHR_materials_clearcoat` (read raw: the gltf crate does not type it), or `None` without a

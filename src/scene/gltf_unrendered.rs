@@ -36,19 +36,10 @@ pub fn material_warnings(m: &gltf::Material) -> Vec<String> {
     unrendered.into_iter().map(|what| format!("material '{name}': {what}")).collect()
 }
 
-/// The textures of `m` that are not read: those Caustic does not render yet, and those on a
-/// texture coordinate set it does not carry.
+/// The textures of `m` that are not read: those on a texture coordinate set Caustic does not
+/// carry.
 fn unrendered_textures(m: &gltf::Material) -> Vec<String> {
     let pbr = m.pbr_metallic_roughness();
-    let named = [
-        ("specular", has_texture(m, "KHR_materials_specular", "specularTexture")),
-        ("specular colour", has_texture(m, "KHR_materials_specular", "specularColorTexture")),
-    ];
-    let mut unrendered: Vec<String> = named
-        .iter()
-        .filter(|(_, present)| *present)
-        .map(|(what, _)| format!("its {what} texture is not rendered"))
-        .collect();
     let raw = |extension: &str, key: &str| Some(raw_info_set(m.extension_value(extension)?.get(key)?));
     let coat = |key: &str| raw("KHR_materials_clearcoat", key);
     let sets = [
@@ -61,19 +52,17 @@ fn unrendered_textures(m: &gltf::Material) -> Vec<String> {
         ("clearcoat normal", coat("clearcoatNormalTexture")),
         ("sheen colour", raw("KHR_materials_sheen", "sheenColorTexture")),
         ("sheen roughness", raw("KHR_materials_sheen", "sheenRoughnessTexture")),
+        ("specular", m.specular().and_then(|s| s.specular_texture()).map(|i| info_set(&i))),
+        ("specular colour", m.specular().and_then(|s| s.specular_color_texture()).map(|i| info_set(&i))),
     ];
-    for (what, set) in sets {
-        if let Some(set) = set.filter(|&s| s as usize >= UV_SETS) {
-            unrendered.push(format!(
+    sets.into_iter()
+        .filter_map(|(what, set)| {
+            let set = set.filter(|&s| s as usize >= UV_SETS)?;
+            Some(format!(
                 "its {what} texture reads texture coordinate set {set}, which is not rendered (sets 0 and 1 are)"
-            ));
-        }
-    }
-    unrendered
-}
-
-fn has_texture(m: &gltf::Material, extension: &str, texture: &str) -> bool {
-    m.extension_value(extension).is_some_and(|e| e.get(texture).is_some())
+            ))
+        })
+        .collect()
 }
 
 /// One line for each thing in mesh `mesh` that is not rendered.
