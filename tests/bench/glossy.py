@@ -5,7 +5,8 @@ Caustic against Cycles, and Caustic against another Caustic binary (the build be
 
     cargo build --release
     target/bpy-venv/bin/python tests/bench/glossy.py [--budgets 10,60] [--threads 2]
-        [--reference-seconds 600] [--baseline path/to/caustic] [--resolution 96x72] [-o OUT]
+        [--reference-seconds 600] [--baseline path/to/caustic] [--resolution 96x72]
+        [--gold-roughness 0.3] [-o OUT]
 
 Budgets are CPU seconds (threads x wall time; both renderers get the same threads). Cycles: CPU
 device, denoising and adaptive sampling off, a 1-pixel box filter, no glossy filter, 32 bounces.
@@ -39,11 +40,11 @@ from enable_addon import enable_addon  # noqa: E402
 GOLD = 2
 
 
-def studio(resolution):
+def studio(resolution, roughness):
     """The gold sphere (index 2) and the glass ball (index 3) on the default floor (index 1)."""
     scene = ps.clear()
     ps.studio(ps.principled("Floor", Base_Color=(0.5, 0.5, 0.5, 1.0)))
-    gold = ps.principled("Gold", Base_Color=(1.0, 0.77, 0.34, 1.0), Metallic=1.0, Roughness=0.3)
+    gold = ps.principled("Gold", Base_Color=(1.0, 0.77, 0.34, 1.0), Metallic=1.0, Roughness=roughness)
     glass = ps.principled("Glass", Transmission_Weight=1.0, Roughness=0.0, IOR=1.5)
     for material, x, index in ((gold, -1.1, GOLD), (glass, 1.1, 3)):
         ps.add(bpy.ops.mesh.primitive_uv_sphere_add, material, index=index, segments=64, ring_count=32, radius=1.0,
@@ -116,13 +117,14 @@ def main():
     parser.add_argument("--baseline", help="another caustic binary to measure beside this build's")
     parser.add_argument("--binary", default=str(ROOT / "target" / "release" / "caustic"))
     parser.add_argument("--resolution", default="96x72")
+    parser.add_argument("--gold-roughness", type=float, default=0.3)
     parser.add_argument("-o", "--out", default="bench-glossy")
     args = parser.parse_args()
     out = pathlib.Path(args.out).resolve()
     out.mkdir(parents=True, exist_ok=True)
     resolution = tuple(int(v) for v in args.resolution.split("x"))
     enable_addon(args.binary)
-    scene = studio(resolution)
+    scene = studio(resolution, args.gold_roughness)
     gltf = out / "studio.gltf"
     sys.modules["caustic.export"].export(scene, gltf)
     binaries = {"caustic": args.binary} | ({"baseline": args.baseline} if args.baseline else {})
@@ -136,6 +138,7 @@ def main():
             caustic(binary, gltf, wall, args.threads, references[name].parent, seed=777)
     mask = gold_mask(references["cycles"])
     results = {"pixels": int(mask.sum()), "resolution": list(resolution), "threads": args.threads,
+               "gold_roughness": args.gold_roughness,
                "reference_wall_s": wall, "runs": []}
     for budget in (float(b) for b in args.budgets.split(",")):
         seconds = budget / args.threads
