@@ -235,7 +235,7 @@ impl Material {
     }
 
     /// The shading frame at a surface point: the interpolated normal, bent by the normal map.
-    pub fn shading_frame(&self, inputs: &SurfaceInputs, frame: ShadingFrame) -> ShadingFrame {
+    fn shading_frame(&self, inputs: &SurfaceInputs, frame: ShadingFrame) -> ShadingFrame {
         match &self.normal_map {
             Some(map) => map.apply(inputs, frame),
             None => frame,

@@ -57,11 +57,6 @@ impl Coat {
         self.mix(self.tables().at(mu))
     }
 
-    /// The coat's cosine-weighted mean albedo.
-    pub fn mean_albedo(&self) -> SampledSpectrum {
-        self.mix(self.tables().means)
-    }
-
     /// The share of light the coat lets through to the base and back, from cosine `mu_i` to
     /// `mu_o`: `(1 - E(wo)) (1 - E(wi)) / (1 - E_avg)`.
     fn through(&self, mu_o: f32, mu_i: f32) -> SampledSpectrum {
