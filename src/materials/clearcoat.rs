@@ -15,7 +15,8 @@ use std::sync::Arc;
 
 use glam::{Vec3, Vec4};
 
-use super::inputs::{NormalMap, SurfaceInputs};
+use super::inputs::SurfaceInputs;
+use super::normal_map::NormalMap;
 use super::plastic::{Coat, Plastic};
 use super::{Bsdf, ShadingFrame, SMOOTH_ROUGHNESS};
 use crate::texture::DataTexture;

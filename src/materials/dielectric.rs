@@ -69,7 +69,7 @@ mod tests {
     #[test]
     fn a_thin_wall_transmits_unbent_and_reflects_both_faces() {
         let wo = Vec3::new(0.6, 0.0, 0.8);
-        let frame = ShadingFrame { n: Vec3::Z, ng: Vec3::Z };
+        let frame = ShadingFrame::new(Vec3::Z, Vec3::Z);
         let through = sample_thin(1.5, frame, wo, 0.999).unwrap();
         assert!((through.wi + wo).length() < 1e-6, "{:?}", through.wi);
         let back = sample_thin(1.5, frame, wo, 0.0).unwrap();
@@ -84,7 +84,7 @@ mod tests {
     #[test]
     fn refraction_obeys_snell() {
         let wo = Vec3::new(0.6, 0.0, 0.8);
-        let frame = ShadingFrame { n: Vec3::Z, ng: Vec3::Z };
+        let frame = ShadingFrame::new(Vec3::Z, Vec3::Z);
         let s = sample(1.5, frame, wo, 0.99, Transport::Importance).unwrap();
         let sin_t = (1.0 - s.wi.z * s.wi.z).sqrt();
         assert!((sin_t * 1.5 - 0.6).abs() < 1e-5);

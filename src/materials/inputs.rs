@@ -1,14 +1,11 @@
 //! What a material reads at a surface point besides its normals: texture coordinates, the vertex
-//! colour (`COLOR_0`) and the tangent a normal map is expressed in. A mesh without vertex colours
+//! colour (`COLOR_0`) and the tangent a normal map (`normal_map.rs`) is expressed in. A mesh without vertex colours
 //! or tangents carries none, and its materials pay nothing for them.
-
-use std::sync::Arc;
 
 use glam::{Vec2, Vec3, Vec4};
 
-use super::ShadingFrame;
 use crate::spectrum::{RgbSpectrum, SampledSpectrum};
-use crate::texture::{DataTexture, UV_SETS};
+use crate::texture::UV_SETS;
 
 /// The vertex colour at barycentric weights `w` of a triangle whose corners' reflectance spectra
 /// are `corners`, at four wavelengths, nm (spectra interpolated by value, as texels are).
@@ -30,41 +27,9 @@ pub struct SurfaceInputs {
     pub tangent: Vec4,
 }
 
-/// A tangent-space normal map (glTF `normalTexture`): RGB in [0, 1] to a normal in [-1, 1], x
-/// and y scaled by `scale`.
-#[derive(Clone, Debug)]
-pub struct NormalMap {
-    /// The image.
-    pub texture: Arc<DataTexture>,
-    /// glTF's `normalTexture.scale`.
-    pub scale: f32,
-}
-
 impl Default for SurfaceInputs {
     /// A point with texture coordinates 0, no vertex colour and no tangent.
     fn default() -> Self {
         SurfaceInputs { uv: [Vec2::ZERO; UV_SETS], colour: SampledSpectrum::ONE, tangent: Vec4::ZERO }
-    }
-}
-
-impl NormalMap {
-    /// The shading frame with its normal bent by the map (the geometric normal unchanged). Without
-    /// a tangent, or where the map's normal would face away from the surface, the frame is kept.
-    pub fn apply(&self, inputs: &SurfaceInputs, frame: ShadingFrame) -> ShadingFrame {
-        let t = inputs.tangent.truncate();
-        if t == Vec3::ZERO {
-            return frame;
-        }
-        let n = frame.n;
-        // Gram-Schmidt: the interpolated tangent made perpendicular to the shading normal.
-        let t = (t - n * n.dot(t)).normalize_or_zero();
-        let b = n.cross(t) * inputs.tangent.w.signum();
-        let texel = self.texture.eval(&inputs.uv) * 2.0 - Vec4::ONE;
-        let local = Vec3::new(texel.x * self.scale, texel.y * self.scale, texel.z);
-        let bent = (t * local.x + b * local.y + n * local.z).normalize_or_zero();
-        if bent == Vec3::ZERO || !bent.is_finite() || bent.dot(frame.ng) * n.dot(frame.ng) <= 0.0 {
-            return frame;
-        }
-        ShadingFrame { n: bent, ng: frame.ng }
     }
 }

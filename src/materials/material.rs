@@ -9,9 +9,10 @@ use std::sync::Arc;
 use glam::{Vec3, Vec4};
 
 use super::clearcoat::Clearcoat;
-use super::inputs::{NormalMap, SurfaceInputs};
+use super::inputs::SurfaceInputs;
 use super::layer_albedo::{eta_of_f0, f0_of_eta};
 use super::layering::{self, Choice, Over};
+use super::normal_map::NormalMap;
 use super::plastic::{self, Coat, Plastic};
 use super::sheen::Sheen;
 use super::{Bsdf, ShadingFrame, GLOSSY_ALPHA};

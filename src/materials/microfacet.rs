@@ -59,7 +59,11 @@ pub fn reflect(wo: Vec3, n: Vec3) -> Vec3 {
 
 /// `wo` and `wi` in the frame of `n` (flipped to the side of `wo`), and that frame.
 pub fn to_local(n: Vec3, wo: Vec3, wi: Vec3) -> (Vec3, Vec3, [Vec3; 3]) {
-    let n = face_toward(n, wo);
+    to_frame(face_toward(n, wo), wo, wi)
+}
+
+/// `wo` and `wi` in the frame of `n` as it is, and that frame.
+pub fn to_frame(n: Vec3, wo: Vec3, wi: Vec3) -> (Vec3, Vec3, [Vec3; 3]) {
     let (t, b) = basis(n);
     let local = |w: Vec3| Vec3::new(w.dot(t), w.dot(b), w.dot(n));
     (local(wo), local(wi), [t, b, n])

@@ -6,7 +6,7 @@
 //! closed [`Bsdf`] with a value per wavelength (directions and indices follow the hero
 //! wavelength). One lobe or layer per file: `diffuse.rs`, `conductor.rs`, `dielectric.rs`,
 //! `plastic.rs` (the specular layer over the base, with `layer_albedo.rs`), over the GGX
-//! distribution in `microfacet.rs`.
+//! distribution in `microfacet.rs`; `normal_map.rs` bends the shading normal and shadows the bend.
 //!
 //! Directions are world-space unit vectors; `wo` and `wi` both point away from the surface.
 
@@ -19,6 +19,7 @@ mod layer_albedo;
 mod layering;
 mod material;
 mod microfacet;
+mod normal_map;
 mod plastic;
 mod sheen;
 
@@ -28,9 +29,10 @@ use crate::spectrum::SampledSpectrum;
 
 pub use clearcoat::{Clearcoat, COAT_IOR};
 pub use dielectric::fresnel_dielectric;
-pub use inputs::{vertex_colour, NormalMap, SurfaceInputs};
+pub use inputs::{vertex_colour, SurfaceInputs};
 pub use layer_albedo::{eta_of_f0, f0_of_eta};
 pub use material::{Alpha, BaseColour, Coverage, Lobe, Material, Specular, SMOOTH_ROUGHNESS};
+pub use normal_map::NormalMap;
 pub use plastic::{Coat, Plastic};
 pub use sheen::Sheen;
 
@@ -166,21 +168,23 @@ impl Bsdf {
         }
     }
 
-    /// The BSDF value `f(wo, wi)` (zero for delta lobes) with shading normal `n`.
-    pub fn eval(&self, n: Vec3, wo: Vec3, wi: Vec3) -> SampledSpectrum {
+    /// The BSDF value `f(wo, wi)` (zero for delta lobes) in `frame`, light arriving from `wi`.
+    pub fn eval(&self, frame: ShadingFrame, wo: Vec3, wi: Vec3) -> SampledSpectrum {
+        let n = frame.toward(wo);
         match *self {
-            Bsdf::Diffuse { albedo } => diffuse::eval(albedo, n, wo, wi),
+            Bsdf::Diffuse { albedo } => diffuse::eval(albedo, frame, wo, wi),
             Bsdf::RoughConductor { f0, alpha } => conductor::eval_rough(f0, alpha, n, wo, wi),
-            Bsdf::Plastic { base, f0, eta, alpha } => Plastic::new(base, f0, eta, alpha).eval(n, wo, wi),
+            Bsdf::Plastic { base, f0, eta, alpha } => Plastic::new(base, f0, eta, alpha).eval(frame, wo, wi),
             Bsdf::Sheen { colour, roughness } => sheen::eval(colour, roughness, n, wo, wi),
             _ => Vec4::ZERO,
         }
     }
 
     /// The density per solid angle with which [`Bsdf::sample`] picks `wi` (zero for delta lobes).
-    pub fn pdf(&self, n: Vec3, wo: Vec3, wi: Vec3) -> f32 {
+    pub fn pdf(&self, frame: ShadingFrame, wo: Vec3, wi: Vec3) -> f32 {
+        let n = frame.toward(wo);
         match *self {
-            Bsdf::Diffuse { .. } => diffuse::pdf(n, wo, wi),
+            Bsdf::Diffuse { .. } => diffuse::pdf(n, wi),
             Bsdf::RoughConductor { alpha, .. } => conductor::pdf_rough(alpha, n, wo, wi),
             Bsdf::Plastic { base, f0, eta, alpha } => Plastic::new(base, f0, eta, alpha).pdf(n, wo, wi),
             Bsdf::Sheen { .. } => sheen::pdf(n, wo, wi),
@@ -199,10 +203,10 @@ impl Bsdf {
     ) -> Option<BsdfSample> {
         let n = frame.n;
         match *self {
-            Bsdf::Diffuse { albedo } => diffuse::sample(albedo, n, wo, u),
+            Bsdf::Diffuse { albedo } => diffuse::sample(albedo, frame, wo, u, mode),
             Bsdf::Mirror { weight } => conductor::sample_mirror(weight, n, wo),
             Bsdf::Plastic { base, f0, eta, alpha } => {
-                Plastic::new(base, f0, eta, alpha).sample(n, wo, u, u_lobe)
+                Plastic::new(base, f0, eta, alpha).sample(frame, wo, u, u_lobe, mode)
             }
             Bsdf::Conductor { f0 } => conductor::sample_smooth(f0, n, wo),
             Bsdf::RoughConductor { f0, alpha } => conductor::sample_rough(f0, alpha, n, wo, u),
@@ -215,13 +219,63 @@ impl Bsdf {
     }
 }
 
-/// The normals at a surface point: shading (interpolated) and geometric (the triangle's).
+/// The normals at a surface point: shading (interpolated, then bent by a normal map), geometric
+/// (the triangle's) and smooth (interpolated).
 #[derive(Clone, Copy, Debug)]
 pub struct ShadingFrame {
     /// Shading normal.
     pub n: Vec3,
     /// Geometric normal, pointing to the outside of the mesh.
     pub ng: Vec3,
+    /// The interpolated normal a normal map bent `n` from (`n` itself without one).
+    pub smooth: Vec3,
+}
+
+impl ShadingFrame {
+    /// The frame of interpolated normal `n` on a face of normal `ng`, no normal map.
+    pub const fn new(n: Vec3, ng: Vec3) -> Self {
+        ShadingFrame { n, ng, smooth: n }
+    }
+
+    /// Whether a normal map bent the shading normal.
+    pub fn is_bent(&self) -> bool {
+        self.smooth != self.n
+    }
+
+    /// The shading normal turned to the side of the smooth normal that `w` is on (`n` turned
+    /// toward `w` without a normal map: see `normal_map.rs`).
+    pub fn toward(&self, w: Vec3) -> Vec3 {
+        if self.smooth.dot(w) < 0.0 {
+            -self.n
+        } else {
+            self.n
+        }
+    }
+
+    /// The factor on diffuse light arriving from `wi`: 1 without a normal map, else its
+    /// shadowing ([`normal_map::shadowing`]).
+    pub fn diffuse_shadowing(&self, wi: Vec3) -> f32 {
+        if self.is_bent() {
+            normal_map::shadowing(self.smooth, self.n, wi)
+        } else {
+            1.0
+        }
+    }
+
+    /// For a photon arriving from `wi` at a surface with a bent normal, the bent cosine over the
+    /// geometric one its density carries (1 without a normal map: see `normal_map.rs`).
+    pub fn photon_cosine_ratio(&self, wi: Vec3) -> f32 {
+        if self.is_bent() {
+            let geometric = self.ng.dot(wi).abs();
+            if geometric > 0.0 {
+                self.n.dot(wi).abs() / geometric
+            } else {
+                0.0
+            }
+        } else {
+            1.0
+        }
+    }
 }
 
 /// `n` flipped, if needed, to the side of `w`.
@@ -240,7 +294,7 @@ mod tests {
     use crate::spectrum::{Dispersion, RgbSpectrum, Wavelengths};
     use glam::DVec4;
 
-    const FRAME: ShadingFrame = ShadingFrame { n: Vec3::Z, ng: Vec3::Z };
+    const FRAME: ShadingFrame = ShadingFrame::new(Vec3::Z, Vec3::Z);
 
     /// Every sample's weight is `f cos / pdf` as `eval` and `pdf` say, and the mean weight (the
     /// importance-sampled albedo) matches the albedo integrated with uniform directions.
@@ -252,7 +306,7 @@ mod tests {
             let Some(s) = bsdf.sample(FRAME, wo, rng.next_2d(), rng.next_1d(), Transport::Radiance) else {
                 continue;
             };
-            let (f, pdf) = (bsdf.eval(Vec3::Z, wo, s.wi), bsdf.pdf(Vec3::Z, wo, s.wi));
+            let (f, pdf) = (bsdf.eval(FRAME, wo, s.wi), bsdf.pdf(FRAME, wo, s.wi));
             assert!((s.pdf / pdf - 1.0).abs() < 1e-3, "{bsdf:?}: pdf {} vs {pdf}", s.pdf);
             let expected = f * s.wi.z.abs() / pdf;
             assert!((s.weight / expected - Vec4::ONE).abs().max_element() < 1e-3, "{bsdf:?}: weight");
@@ -261,7 +315,7 @@ mod tests {
         let uniform: DVec4 = (0..n)
             .map(|_| {
                 let wi = square_to_sphere(rng.next_2d());
-                (bsdf.eval(Vec3::Z, wo, wi) * wi.z.abs() * 4.0 * std::f32::consts::PI).as_dvec4()
+                (bsdf.eval(FRAME, wo, wi) * wi.z.abs() * 4.0 * std::f32::consts::PI).as_dvec4()
             })
             .sum();
         let (sampled, uniform) = (sampled / n as f64, uniform / n as f64);
@@ -381,7 +435,7 @@ mod tests {
             }
             for _ in 0..1000 {
                 let (a, b) = (square_to_sphere(rng.next_2d()), square_to_sphere(rng.next_2d()));
-                let (ab, ba) = (sheen.eval(Vec3::Z, a, b), sheen.eval(Vec3::Z, b, a));
+                let (ab, ba) = (sheen.eval(FRAME, a, b), sheen.eval(FRAME, b, a));
                 assert!((ab - ba).abs().max_element() <= 1e-5 * ab.max_element().max(1.0), "{ab} vs {ba}");
             }
         }
@@ -462,7 +516,7 @@ mod tests {
             let bsdf = plastic(0.7, Vec4::new(1.0, 0.8, 0.6, 1.0), alpha);
             for _ in 0..1000 {
                 let (a, b) = (square_to_sphere(rng.next_2d()), square_to_sphere(rng.next_2d()));
-                let (ab, ba) = (bsdf.eval(Vec3::Z, a, b), bsdf.eval(Vec3::Z, b, a));
+                let (ab, ba) = (bsdf.eval(FRAME, a, b), bsdf.eval(FRAME, b, a));
                 assert!((ab - ba).abs().max_element() <= 1e-5 * ab.max_element().max(1.0), "{ab} vs {ba}");
             }
         }

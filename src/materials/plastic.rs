@@ -20,7 +20,7 @@ use std::f32::consts::FRAC_1_PI;
 use glam::{Vec2, Vec3, Vec4};
 
 use super::layer_albedo::{fresnel_remap, LayerAlbedo};
-use super::{microfacet, Bsdf, BsdfSample};
+use super::{microfacet, Bsdf, BsdfSample, ShadingFrame, Transport};
 use crate::sampling::square_to_cosine_hemisphere;
 use crate::spectrum::SampledSpectrum;
 
@@ -107,14 +107,16 @@ impl Plastic {
         self.coat.alpha > 0.0
     }
 
-    /// The base's reflection for local `wo` and `wi` above the surface.
+    /// The base's reflection for local `wo` and `wi` above the surface (`wo` may lie below a
+    /// bent normal, which reflects the base alone: see `normal_map.rs`).
     fn base_value(&self, wo: Vec3, wi: Vec3) -> SampledSpectrum {
-        self.base * FRAC_1_PI * self.coat.through(wo.z, wi.z)
+        self.base * FRAC_1_PI * self.coat.through(wo.z.abs(), wi.z)
     }
 
-    /// The probability of sampling the coat, by its share of the light reflected toward `wo`.
+    /// The probability of sampling the coat, by its share of the light reflected toward `wo`
+    /// (0 below the shading normal, where the coat reflects nothing).
     fn coat_probability(&self, mu_o: f32) -> f32 {
-        if !self.has_rough_coat() {
+        if !self.has_rough_coat() || mu_o <= 0.0 {
             return 0.0;
         }
         if self.base == Vec4::ZERO {
@@ -124,13 +126,15 @@ impl Plastic {
         share(coat, self.base * (Vec4::ONE - coat)).clamp(0.1, 0.9)
     }
 
-    /// `f(wo, wi)` with shading normal `n`.
-    pub fn eval(&self, n: Vec3, wo: Vec3, wi: Vec3) -> SampledSpectrum {
-        let (wo, wi, _) = microfacet::to_local(n, wo, wi);
-        if wo.z <= 0.0 || wi.z <= 0.0 {
+    /// `f(wo, wi)` in `frame`, light arriving from `wi` (the base's share shadowed by a normal
+    /// map's bend: [`ShadingFrame::diffuse_shadowing`]).
+    pub fn eval(&self, frame: ShadingFrame, wo: Vec3, wi: Vec3) -> SampledSpectrum {
+        let (wo_local, wi_local, _) = microfacet::to_frame(frame.toward(wo), wo, wi);
+        if wi_local.z <= 0.0 {
             return Vec4::ZERO;
         }
-        self.base_value(wo, wi) + self.coat_value(wo, wi)
+        self.base_value(wo_local, wi_local) * frame.diffuse_shadowing(wi)
+            + self.coat_value(wo_local, wi_local)
     }
 
     fn coat_value(&self, wo: Vec3, wi: Vec3) -> SampledSpectrum {
@@ -143,14 +147,15 @@ impl Plastic {
         }
     }
 
-    /// The density with which [`Plastic::sample`] picks `wi`.
+    /// The density with which [`Plastic::sample`] picks `wi`, `n` the shading normal on `wo`'s
+    /// side ([`ShadingFrame::toward`]).
     pub fn pdf(&self, n: Vec3, wo: Vec3, wi: Vec3) -> f32 {
-        let (wo, wi, _) = microfacet::to_local(n, wo, wi);
+        let (wo, wi, _) = microfacet::to_frame(n, wo, wi);
         self.local_pdf(wo, wi)
     }
 
     fn local_pdf(&self, wo: Vec3, wi: Vec3) -> f32 {
-        if wo.z <= 0.0 || wi.z <= 0.0 {
+        if wi.z <= 0.0 {
             return 0.0;
         }
         let p = self.coat_probability(wo.z);
@@ -159,12 +164,17 @@ impl Plastic {
     }
 
     /// Samples the coat with its probability, else the base's cosine lobe; the weight is the
-    /// whole BSDF over the mixture's density.
-    pub fn sample(&self, n: Vec3, wo: Vec3, u: Vec2, u_lobe: f32) -> Option<BsdfSample> {
-        let (wo_local, _, [t, b, n]) = microfacet::to_local(n, wo, wo);
-        if wo_local.z <= 0.0 {
-            return None;
-        }
+    /// whole BSDF over the mixture's density (for `mode`'s side of the light: the base's
+    /// shadowing follows the direction light arrives from).
+    pub fn sample(
+        &self,
+        frame: ShadingFrame,
+        wo: Vec3,
+        u: Vec2,
+        u_lobe: f32,
+        mode: Transport,
+    ) -> Option<BsdfSample> {
+        let (wo_local, _, [t, b, n]) = microfacet::to_frame(frame.toward(wo), wo, wo);
         let wi_local = if u_lobe < self.coat_probability(wo_local.z) {
             microfacet::sample_reflection(self.coat.alpha, wo_local, u)?.wi
         } else {
@@ -173,12 +183,14 @@ impl Plastic {
         let wi = (t * wi_local.x + b * wi_local.y + n * wi_local.z).normalize();
         // Density and value from the world direction, as `eval` and `pdf` compute them: a narrow
         // lobe's peak would otherwise differ by rounding between the two.
-        let (wo_local, wi_local, _) = microfacet::to_local(n, wo, wi);
+        let (wo_local, wi_local, _) = microfacet::to_frame(n, wo, wi);
         let pdf = self.local_pdf(wo_local, wi_local);
         if pdf <= 0.0 {
             return None;
         }
-        let f = self.base_value(wo_local, wi_local) + self.coat_value(wo_local, wi_local);
+        let light_side = if mode == Transport::Radiance { wi } else { wo };
+        let base = self.base_value(wo_local, wi_local) * frame.diffuse_shadowing(light_side);
+        let f = base + self.coat_value(wo_local, wi_local);
         Some(BsdfSample { wi, weight: f * wi_local.z / pdf, pdf, is_delta: false })
     }
 }

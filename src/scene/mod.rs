@@ -102,7 +102,7 @@ impl Geometry {
         let n = if n == Vec3::ZERO { ng } else { n };
         let uv = self.uvs[i0] * w[0] + self.uvs[i1] * w[1] + self.uvs[i2] * w[2];
         let inputs = self.extras.inputs([i0, i1, i2], Vec3::from(w), uv, lambda);
-        Surface { p: hit.p, frame: ShadingFrame { n, ng }, inputs, material: t.material, scale: hit.scale }
+        Surface { p: hit.p, frame: ShadingFrame::new(n, ng), inputs, material: t.material, scale: hit.scale }
     }
 
     /// Vertex `v`'s texture coordinates, one pair per set.

@@ -78,16 +78,16 @@ impl DirectLight<'_> {
         let Some(sample) = light.sample_incident(point.p, rng.next_2d(), wavelengths) else {
             return DirectTerm::ZERO;
         };
-        let ShadingFrame { n, ng } = point.frame;
+        let ShadingFrame { n, ng, .. } = point.frame;
         if ng.dot(sample.wi) * ng.dot(point.wo) <= 0.0 {
             return DirectTerm::ZERO;
         }
-        let f = point.bsdf.eval(n, point.wo, sample.wi);
+        let f = point.bsdf.eval(point.frame, point.wo, sample.wi);
         if f.max_element() <= 0.0 {
             return DirectTerm::ZERO;
         }
         stats.shadow_rays += 1;
-        let origin = offset_origin(point.p, ng, sample.wi, point.scale);
+        let origin = offset_origin(point.p, ng, sample.wi, point.scale());
         let t_max = if sample.distance.is_finite() { sample.distance * (1.0 - 1e-4) } else { f32::INFINITY };
         let ray = ShadowRay { origin, direction: sample.wi, t_max };
         let through = if renderer.has_cut_away_surfaces {
@@ -101,7 +101,7 @@ impl DirectLight<'_> {
             return DirectTerm::ZERO;
         }
         let weight = if sample.pdf > 0.0 {
-            power_heuristic(p_choice * sample.pdf, point.bsdf.pdf(n, point.wo, sample.wi))
+            power_heuristic(p_choice * sample.pdf, point.bsdf.pdf(point.frame, point.wo, sample.wi))
         } else {
             1.0
         };
@@ -123,7 +123,7 @@ impl DirectLight<'_> {
             return DirectTerm::ZERO;
         }
         stats.shadow_rays += 1;
-        let origin = offset_origin(point.p, point.frame.ng, sample.wi, point.scale);
+        let origin = offset_origin(point.p, point.frame.ng, sample.wi, point.scale());
         let light_pdf = |index: usize, q: Vec3| {
             renderer.light_choice.probability(index) * scene.lights[index].pdf_incident(point.p, sample.wi, q)
         };

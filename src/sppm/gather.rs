@@ -297,8 +297,8 @@ struct Weigher<'a> {
     vp: &'a VisiblePoint,
     /// The geometric normal on the side the point is seen from.
     front: Vec3,
-    /// For a diffuse surface, the cosine of the direction it is seen from (photons count from
-    /// the same side of the shading normal) and its BSDF value.
+    /// For a diffuse surface without a normal map, the cosine of the direction it is seen from
+    /// (photons count from the same side of the shading normal) and its BSDF value.
     diffuse: Option<(f32, SampledSpectrum)>,
     /// The factor on the flux of a photon that carries its hero wavelength alone.
     hero_only_scale: f32,
@@ -317,7 +317,9 @@ struct Weigher<'a> {
 impl<'a> Weigher<'a> {
     fn new(kernel: &'a Kernel, vp: &'a VisiblePoint, known_walls: Option<[Wall; 3]>) -> Self {
         let diffuse = match vp.bsdf {
-            Bsdf::Diffuse { albedo } => Some((vp.frame.n.dot(vp.wo), albedo * FRAC_1_PI)),
+            Bsdf::Diffuse { albedo } if !vp.frame.is_bent() => {
+                Some((vp.frame.n.dot(vp.wo), albedo * FRAC_1_PI))
+            }
             _ => None,
         };
         Weigher {
@@ -325,7 +327,7 @@ impl<'a> Weigher<'a> {
             vp,
             front: vp.frame.ng * vp.frame.ng.dot(vp.wo).signum(),
             diffuse,
-            hero_only_scale: if vp.hero_only { 1.0 / LANES as f32 } else { 1.0 },
+            hero_only_scale: if vp.hero_only() { 1.0 / LANES as f32 } else { 1.0 },
             flux_kernel: SampledSpectrum::ZERO,
             flux_laplacian: SampledSpectrum::ZERO,
             walls: [Wall::default(); 3],
@@ -356,7 +358,10 @@ impl<'a> Weigher<'a> {
         let weighted = match self.diffuse {
             Some((cos_wo, _)) if photon.wi.dot(self.vp.frame.n) * cos_wo > 0.0 => flux,
             Some(_) => return,
-            None => flux * self.vp.bsdf.eval(self.vp.frame.n, self.vp.wo, photon.wi),
+            None => {
+                let frame = self.vp.frame;
+                flux * self.vp.bsdf.eval(frame, self.vp.wo, photon.wi) * frame.photon_cosine_ratio(photon.wi)
+            }
         };
         let t2 = d2 / self.kernel.r2;
         self.flux_kernel += weighted * ((1.0 - t2) * (1.0 - t2));

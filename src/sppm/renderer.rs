@@ -29,10 +29,36 @@ pub struct VisiblePoint {
     pub bsdf: Bsdf,
     /// Path throughput from the camera to here.
     pub beta: SampledSpectrum,
-    /// The path carries its hero wavelength alone ([`crate::spectrum::hero_only`]).
-    pub hero_only: bool,
+    /// The largest coordinate of its triangle (for offsetting rays that leave it), negative when
+    /// the path carries its hero wavelength alone: one field for both keeps the point at 128 bytes.
+    scale_and_hero_only: f32,
+}
+
+impl VisiblePoint {
+    /// A visible point at `p` on a triangle whose largest coordinate is `scale`, reached with
+    /// throughput `beta`, carrying its hero wavelength alone if `hero_only`.
+    pub fn new(
+        p: Vec3,
+        frame: ShadingFrame,
+        wo: Vec3,
+        bsdf: Bsdf,
+        beta: SampledSpectrum,
+        hero_only: bool,
+        scale: f32,
+    ) -> Self {
+        let scale_and_hero_only = if hero_only { -scale.abs() } else { scale.abs() };
+        VisiblePoint { p, frame, wo, bsdf, beta, scale_and_hero_only }
+    }
+
     /// The largest coordinate of its triangle (for offsetting rays that leave it).
-    pub scale: f32,
+    pub fn scale(&self) -> f32 {
+        self.scale_and_hero_only.abs()
+    }
+
+    /// Whether the path carries its hero wavelength alone ([`crate::spectrum::hero_only`]).
+    pub fn hero_only(&self) -> bool {
+        self.scale_and_hero_only.is_sign_negative()
+    }
 }
 
 // Visible points are made, moved and collected once per pixel and pass: at 128 bytes they move

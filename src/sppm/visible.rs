@@ -150,15 +150,8 @@ pub fn continue_eye_path(
             break;
         }
         state.beta *= weight;
-        let vertex = VisiblePoint {
-            p: surface.p,
-            frame,
-            wo,
-            bsdf,
-            beta: state.beta,
-            hero_only: state.hero_only,
-            scale: surface.scale,
-        };
+        let vertex =
+            VisiblePoint::new(surface.p, frame, wo, bsdf, state.beta, state.hero_only, surface.scale);
         if bsdf.is_gathered_at() {
             direct = DirectLight { renderer, wavelengths: &pass.wavelengths, point: &vertex }
                 .estimate(rng, &mut stats);

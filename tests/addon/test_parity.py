@@ -115,9 +115,6 @@ class Parity(unittest.TestCase):
     def test_sheen(self):
         self.check("sheen")
 
-    # Known gap: Caustic's normal-mapped cube reads 1.3x Cycles' (the normal map's analytic tests
-    # in tests/materials.rs pass; the difference with Cycles is not yet found).
-    @unittest.expectedFailure
     def test_normal_mapped(self):
         self.check("normal_mapped")
 
