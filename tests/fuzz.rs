@@ -85,8 +85,8 @@ fn png_uri(width: u32, height: u32, rgba: [u8; 4]) -> String {
 
 /// A scene with every texture and vertex input Caustic reads: base colour on the second
 /// texture coordinate set through `KHR_texture_transform`, metallic-roughness, a normal map,
-/// a specular layer, a clear coat and a sheen with their textures, `COLOR_0`, `TEXCOORD_1` and
-/// `TANGENT`, under a uniform world.
+/// a specular layer, a clear coat and a sheen with their textures, `COLOR_0` (its alpha cutting),
+/// `TEXCOORD_1` and `TANGENT`, under a uniform world.
 fn textured_seed() -> Value {
     let mut gltf = common::GltfBuilder::default();
     let quad = [
@@ -110,7 +110,8 @@ fn textured_seed() -> Value {
                 "sheenRoughnessFactor": 0.5, "sheenRoughnessTexture": {"index": 1}}}}));
     gltf.mesh_with_uvs("Ground", &quad, &uvs, material);
     gltf.attribute("TEXCOORD_1", &uvs.concat(), 2, "VEC2");
-    gltf.attribute("COLOR_0", &[[0.9f32, 0.5, 0.1, 1.0]; 6].concat(), 4, "VEC4");
+    let alphas = [1.0f32, 0.2, 0.9, 0.6, 1.0, 0.1];
+    gltf.attribute("COLOR_0", &alphas.map(|a| [0.9f32, 0.5, 0.1, a]).concat(), 4, "VEC4");
     gltf.attribute("TANGENT", &[[1.0f32, 0.0, 0.0, 1.0]; 6].concat(), 4, "VEC4");
     gltf.camera([0.0, 3.0, 0.0], [0.0, -1.0, 0.0], 0.8);
     gltf.scene_extras(json!({"world": {"color": [1.0, 1.0, 1.0], "strength": 1.0}}));

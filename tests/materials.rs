@@ -306,9 +306,9 @@ fn texture_transform_moves_the_texture() {
 }
 
 /// A black leaf at height 1 over the ground of `GROUND` (the same square), whose base colour
-/// texture `texture` cuts it as `alpha_mode` says, under a sun straight above; the ground seen
-/// from `eye` (below the leaf or above it).
-fn leaf_over_ground(dir: &Path, alpha: Value, texture: &str, eye: f32) -> Image {
+/// texture `texture` (and vertex colours of alpha `vertex_alpha`, if any) cut it as `alpha_mode`
+/// says, under a sun straight above; the ground seen from `eye` (below the leaf or above it).
+fn leaf_over_ground(dir: &Path, alpha: Value, texture: &str, vertex_alpha: Option<f32>, eye: f32) -> Image {
     let mut gltf = GltfBuilder::default();
     gltf.texture(texture);
     let ground = gltf.material(lambert(json!({})));
@@ -321,6 +321,9 @@ fn leaf_over_ground(dir: &Path, alpha: Value, texture: &str, eye: f32) -> Image 
     let leaf = gltf.material(leaf);
     let raised = GROUND.map(|t| t.map(|p| [p[0], 1.0, p[2]]));
     gltf.mesh_with_uvs("Leaf", &raised, &ground_uvs(), leaf);
+    if let Some(a) = vertex_alpha {
+        gltf.attribute("COLOR_0", &[[1.0f32, 1.0, 1.0, a]; 6].concat(), 4, "VEC4");
+    }
     gltf.light(json!({"type": "directional", "intensity": 683.0}), [0.0, 5.0, 0.0], [0.0, -1.0, 0.0]);
     gltf.camera([0.0, eye, 0.0], [0.0, -1.0, 0.0], if eye < 1.0 { 1.5 } else { 0.5 });
     gltf.scene_extras(json!({"resolution": [32, 32]}));
@@ -339,13 +342,13 @@ fn an_alpha_masked_leaf_casts_the_shadow_of_its_shape() {
         .unwrap();
     let mask = json!({"alphaMode": "MASK", "alphaCutoff": 0.5});
     // From 0.5 above the ground, under the leaf: the left half of the ground is in its shadow.
-    let below = leaf_over_ground(dir.path(), mask.clone(), "half.png", 0.5);
+    let below = leaf_over_ground(dir.path(), mask.clone(), "half.png", None, 0.5);
     let (shadow, lit) = (below.luminance(2, 12, 10, 22), below.luminance(20, 30, 10, 22));
     // The lit ground: albedo 0.8 / pi under 1 W/m^2.
     assert!((lit / (0.8 / std::f64::consts::PI) - 1.0).abs() < 0.03, "lit {lit}");
     assert!(shadow < 1e-3 * lit, "shadow {shadow}, lit {lit}");
     // From above: the black leaf on the left, the lit ground through the cut on the right.
-    let above = leaf_over_ground(dir.path(), mask, "half.png", 4.0);
+    let above = leaf_over_ground(dir.path(), mask, "half.png", None, 4.0);
     let (leaf, hole) = (above.luminance(6, 10, 14, 18), above.luminance(22, 26, 14, 18));
     assert!(leaf < 1e-3 && (hole / lit - 1.0).abs() < 0.03, "leaf {leaf}, hole {hole}, lit {lit}");
 }
@@ -359,13 +362,37 @@ fn a_blended_leaf_lets_its_transparency_through() {
         .save(dir.path().join("quarter.png"))
         .unwrap();
     let blend = json!({"alphaMode": "BLEND"});
-    let below = leaf_over_ground(dir.path(), blend.clone(), "quarter.png", 0.5).luminance(4, 28, 4, 28);
+    let below = leaf_over_ground(dir.path(), blend.clone(), "quarter.png", None, 0.5).luminance(4, 28, 4, 28);
     let open = 0.8 / std::f64::consts::PI;
     let alpha = 64.0 / 255.0;
     assert!((below / (open * (1.0 - alpha)) - 1.0).abs() < 0.02, "below {below} vs {}", open * (1.0 - alpha));
-    let above = leaf_over_ground(dir.path(), blend, "quarter.png", 4.0).luminance(8, 24, 8, 24);
+    let above = leaf_over_ground(dir.path(), blend, "quarter.png", None, 4.0).luminance(8, 24, 8, 24);
     let expected = open * (1.0 - alpha) * (1.0 - alpha);
     assert!((above / expected - 1.0).abs() < 0.05, "above {above} vs {expected}");
+}
+
+/// The vertex colours' alpha multiplies the texture's (glTF: `COLOR_0` multiplies the base
+/// colour, alpha included): a BLEND leaf of texture alpha 0.5 and vertex alpha 0.5 lets three
+/// quarters of the sun through (2%); a MASK leaf of cutoff 0.4 and the same alphas is cut away.
+#[test]
+fn vertex_alpha_multiplies_the_leafs_alpha() {
+    let dir = tempfile::tempdir().unwrap();
+    image::RgbaImage::from_pixel(2, 2, image::Rgba([0, 0, 0, 128]))
+        .save(dir.path().join("half_alpha.png"))
+        .unwrap();
+    let open = 0.8 / std::f64::consts::PI;
+    let alpha = 0.5 * 128.0 / 255.0;
+    let below = |mode: Value| {
+        leaf_over_ground(dir.path(), mode, "half_alpha.png", Some(0.5), 0.5).luminance(4, 28, 4, 28)
+    };
+    let blended = below(json!({"alphaMode": "BLEND"}));
+    assert!(
+        (blended / (open * (1.0 - alpha)) - 1.0).abs() < 0.02,
+        "blended {blended} vs {}",
+        open * (1.0 - alpha)
+    );
+    let masked = below(json!({"alphaMode": "MASK", "alphaCutoff": 0.4}));
+    assert!((masked / open - 1.0).abs() < 0.02, "masked {masked} vs {open}");
 }
 
 /// An emissive texture glows with its texels' colours, times the emissive factor and strength,

@@ -25,11 +25,18 @@ pub struct SurfaceInputs {
     /// World-space tangent (xyz) and handedness (w: the bitangent is `w n x t`); zero where the
     /// mesh has none.
     pub tangent: Vec4,
+    /// `COLOR_0`'s alpha, multiplying the material's (1 where no mesh's vertex alpha cuts).
+    pub alpha: f32,
 }
 
 impl Default for SurfaceInputs {
     /// A point with texture coordinates 0, no vertex colour and no tangent.
     fn default() -> Self {
-        SurfaceInputs { uv: [Vec2::ZERO; UV_SETS], colour: SampledSpectrum::ONE, tangent: Vec4::ZERO }
+        SurfaceInputs {
+            uv: [Vec2::ZERO; UV_SETS],
+            colour: SampledSpectrum::ONE,
+            tangent: Vec4::ZERO,
+            alpha: 1.0,
+        }
     }
 }

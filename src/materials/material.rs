@@ -113,7 +113,8 @@ pub enum Alpha {
     },
 }
 
-/// Where alpha comes from: the base colour factor's alpha times its texture's alpha channel.
+/// Where alpha comes from: the base colour factor's alpha times its texture's alpha channel and
+/// the vertex colour's alpha.
 #[derive(Clone, Debug)]
 pub struct Coverage {
     /// `baseColorFactor`'s alpha.
@@ -124,9 +125,10 @@ pub struct Coverage {
 
 impl Coverage {
     fn at(&self, inputs: &SurfaceInputs) -> f32 {
+        let factor = self.factor * inputs.alpha;
         match &self.texture {
-            Some(texture) => self.factor * texture.eval(&inputs.uv).w,
-            None => self.factor,
+            Some(texture) => factor * texture.eval(&inputs.uv).w,
+            None => factor,
         }
     }
 }

@@ -1,5 +1,5 @@
 //! Vertex attributes that only some meshes have: a second texture coordinate set, vertex colours
-//! and tangents. Each list is empty while no mesh has it, so scenes without them carry and
+//! (and their alpha, where it cuts) and tangents. Each list is empty while no mesh has it, so scenes without them carry and
 //! interpolate nothing; once one mesh has it, the others' vertices get its default.
 
 use glam::{Mat3, Vec2, Vec3, Vec4};
@@ -14,6 +14,8 @@ pub struct VertexExtras {
     pub uvs1: Vec<Vec2>,
     /// `COLOR_0` as reflectance spectra.
     pub colours: Vec<RgbSpectrum>,
+    /// `COLOR_0`'s alpha, where a mesh's alpha below 1 meets a material whose alpha cuts.
+    pub alphas: Vec<f32>,
     /// `TANGENT`: xyz and handedness w.
     pub tangents: Vec<Vec4>,
 }
@@ -46,6 +48,7 @@ impl VertexExtras {
         let flip = linear.determinant().signum();
         append(&mut self.uvs1, len, &from.uvs1, added, Vec2::ZERO, |&uv| uv);
         append(&mut self.colours, len, &from.colours, added, RgbSpectrum::constant(1.0), |&c| c);
+        append(&mut self.alphas, len, &from.alphas, added, 1.0, |&a| a);
         let turn = |t: &Vec4| (linear * t.truncate()).normalize_or_zero().extend(t.w * flip);
         append(&mut self.tangents, len, &from.tangents, added, Vec4::ZERO, turn);
     }
@@ -67,6 +70,10 @@ impl VertexExtras {
             let xyz = t[v[0]].truncate() * w.x + t[v[1]].truncate() * w.y + t[v[2]].truncate() * w.z;
             xyz.extend(t[v[0]].w)
         };
-        SurfaceInputs { uv: [uv0, uv1], colour, tangent }
+        let alpha = match self.alphas.is_empty() {
+            true => 1.0,
+            false => self.alphas[v[0]] * w.x + self.alphas[v[1]] * w.y + self.alphas[v[2]] * w.z,
+        };
+        SurfaceInputs { uv: [uv0, uv1], colour, tangent, alpha }
     }
 }

@@ -517,7 +517,7 @@ impl Builder<'_> {
 
 /// `TEXCOORD_1`, `COLOR_0` (fitted to reflectance spectra) and `TANGENT` of a primitive of
 /// `count` vertices; each empty where the primitive has none or a mismatched one (warned). The
-/// colours' alpha is not rendered: warned where it is below 1 on a material whose alpha `cuts`.
+/// colours' alpha is kept where it is below 1 somewhere on a material whose alpha `cuts`.
 fn vertex_extras<'a, 's, F>(
     reader: &gltf::mesh::Reader<'a, 's, F>,
     count: usize,
@@ -533,17 +533,20 @@ where
     let colours: Vec<Vec4> =
         reader.read_colors(0).map(|c| c.into_rgba_f32().map(Vec4::from).collect()).unwrap_or_default();
     let tangents: Vec<Vec4> = reader.read_tangents().map(|t| t.map(Vec4::from).collect()).unwrap_or_default();
-    if cuts && colours.iter().any(|c| c.w < 1.0) {
-        warnings.push(format!("mesh '{name}': the alpha of its vertex colours (COLOR_0) is not rendered"));
-    }
     let tangents = optional_attribute(tangents, count, "TANGENT", name, warnings);
     let finite = tangents.iter().all(|t| t.is_finite());
     if !finite {
         warnings.push(format!("mesh '{name}': TANGENT has values that are not finite numbers; ignored"));
     }
+    let colours = optional_attribute(colours, count, "COLOR_0", name, warnings);
+    let alphas = match cuts && colours.iter().any(|c| c.w < 1.0) {
+        true => colours.iter().map(|c| c.w.clamp(0.0, 1.0)).collect(),
+        false => Vec::new(),
+    };
     VertexExtras {
         uvs1: optional_attribute(uvs1, count, "TEXCOORD_1", name, warnings),
-        colours: reflectances(&optional_attribute(colours, count, "COLOR_0", name, warnings)),
+        colours: reflectances(&colours),
+        alphas,
         tangents: if finite { tangents } else { Vec::new() },
     }
 }

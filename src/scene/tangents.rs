@@ -70,6 +70,8 @@ pub fn with_generated_tangents(mesh: &MeshInstance, set: usize) -> Option<MeshIn
     extras.uvs1 = if extras.uvs1.is_empty() { Vec::new() } else { pick(&mesh.extras.uvs1) };
     extras.colours =
         order.iter().filter(|_| !mesh.extras.colours.is_empty()).map(|&v| mesh.extras.colours[v]).collect();
+    extras.alphas =
+        order.iter().filter(|_| !mesh.extras.alphas.is_empty()).map(|&v| mesh.extras.alphas[v]).collect();
     extras.tangents = tangents;
     let triangles = (0..mesh.triangles.len() as u32)
         .map(|k| TriangleRef {
