@@ -500,8 +500,9 @@ fn a_clear_coat_attenuates_the_base_by_what_it_reflects() {
 }
 
 /// A sheen over a white base (Cycles' layering) reflects all the light it receives: in a white
-/// world it vanishes (2%). Over a black base, the fibres reflect a few percent head on and over
-/// three times as much toward the rim.
+/// world it vanishes (2%). Over a black base, the fibres reflect 2.5% head on (Zeltner et al.'s
+/// albedo at roughness 0.5, as Cycles' table has it: the glTF specification's Charlie sheen
+/// reflects several times more) and over three times as much toward the rim.
 #[test]
 fn a_sheen_vanishes_in_a_white_furnace_and_glows_at_the_rim() {
     let dir = tempfile::tempdir().unwrap();
@@ -517,7 +518,7 @@ fn a_sheen_vanishes_in_a_white_furnace_and_glows_at_the_rim() {
     }
     let black = sphere_in_a_white_world(dir.path(), sheen(0.0), 0.55, 16);
     let (centre, rim) = (black.luminance(14, 18, 14, 18), black.luminance(3, 5, 14, 18));
-    assert!(centre > 0.005 && centre < 0.06 && rim > 3.0 * centre, "centre {centre}, rim {rim}");
+    assert!((centre / 0.0249 - 1.0).abs() < 0.1 && rim > 3.0 * centre, "centre {centre}, rim {rim}");
 }
 
 /// The specular textures scale the layer: `specularTexture`'s alpha its factor (128 / 255: half

@@ -108,10 +108,6 @@ class Parity(unittest.TestCase):
     def test_leaf(self):
         self.check("leaf")
 
-    # Known gap: Caustic renders sheen with the glTF specification's Charlie model; Cycles 5.0 with
-    # its microfiber model, which reflects less: the velvet cushion reads 1.18x (red) to 1.7x (green,
-    # where the sheen dominates) Cycles'. The faint sheen on the grey ball agrees within 3.5%.
-    @unittest.expectedFailure
     def test_sheen(self):
         self.check("sheen")
 
