@@ -7,7 +7,8 @@
 //! tinted dielectric), where `s` is the exact dielectric Fresnel at index `eta` remapped to run
 //! from 0 at normal incidence to 1 at grazing. `F` is linear in `f0`, so the albedo is
 //! `f0 E1 + (1 - f0) Es`, with `E1` the albedo of GGX with `F = 1` and `Es` that with `F = s`:
-//! two scalar tables serve every tint and specular level.
+//! two scalar tables serve every tint and specular level. `E1` also gives a metal's
+//! multiple-scattering compensation (`conductor.rs`).
 //!
 //! Each entry is the mean of `F G2 / G1` over visible normals (Heitz 2018) on a stratified
 //! 32 x 32 grid of samples, within 0.5% of a converged integral (tested).
@@ -167,6 +168,16 @@ impl LayerAlbedo {
         });
         Vec2::new(e1, es)
     }
+}
+
+/// The albedo of GGX of `alpha` with `F = 1` seen from cosine `mu`, and its cosine-weighted mean
+/// over the hemisphere: `E1(mu)` and `E1_avg`.
+pub fn white_ggx_albedo(alpha: f32, mu: f32) -> (f32, f32) {
+    let tables = &*TABLES;
+    let r = lerp_index(alpha.max(0.0).sqrt(), ROUGHNESS_NODES);
+    let m = lerp_index(mu.max(0.0).sqrt(), MU_NODES);
+    let e = blend(r, |r| blend(m, |m| tables.e1[r * MU_NODES + m]));
+    (e, blend(r, |r| tables.e1_mean[r]))
 }
 
 /// `value` interpolated linearly between node `i` and `i + 1` with weight `f` on the second.

@@ -4,18 +4,20 @@
 //! 0 and 1), one lobe is chosen by a random number with its weight as probability, which is
 //! unbiased.
 
+use std::cell::OnceCell;
 use std::sync::Arc;
 
 use glam::{Vec3, Vec4};
 
 use super::clearcoat::Clearcoat;
+use super::conductor;
 use super::inputs::SurfaceInputs;
 use super::layer_albedo::{eta_of_f0, f0_of_eta};
 use super::layering::{self, Choice, Over};
 use super::normal_map::NormalMap;
 use super::plastic::{self, Coat, Plastic};
 use super::sheen::Sheen;
-use super::{Bsdf, ShadingFrame, GLOSSY_ALPHA};
+use super::{Bsdf, ShadingFrame, NARROW_COAT_ALPHA};
 use crate::spectrum::{Dispersion, RgbSpectrum, SampledSpectrum, Wavelengths};
 use crate::texture::{DataTexture, Texture};
 
@@ -300,13 +302,11 @@ impl Material {
     }
 
     /// Whether a visible point can lie on it: whether some lobe of it is gathered at (not glass
-    /// alone, nor a smooth or narrow metal alone). Photons that reach it are stored whichever lobe
+    /// alone, nor a metal alone). Photons that reach it are stored whichever lobe
     /// they go on by, since a visible point there picks its own.
     pub fn gathers_photons(&self) -> bool {
-        let narrow_metal = self.metallic >= 1.0
-            && self.metallic_roughness.is_none()
-            && self.roughness * self.roughness < GLOSSY_ALPHA;
-        self.transmission < 1.0 && !narrow_metal
+        let metal = self.metallic >= 1.0 && self.metallic_roughness.is_none();
+        self.transmission < 1.0 && !metal
     }
 
     /// Whether it is a Lambertian surface and nothing else (no specular layer, metal, glass,
@@ -338,7 +338,10 @@ impl Material {
         };
         let (mut weight, mut over) = (1.0, [None; 2]);
         let shading = self.shading_frame(inputs, frame);
-        let under = || self.reflectance(inputs, lambda).element_sum() / 4.0;
+        // The base colour is looked up once, if at all (a texture read), for every layer's pick.
+        let reflectance = OnceCell::new();
+        let reflectance = || *reflectance.get_or_init(|| self.reflectance(inputs, lambda));
+        let under = || reflectance().element_sum() / 4.0;
         if let Some(sheen) = self.sheen.as_ref().and_then(|s| s.at(&inputs.uv, shading, lambda)) {
             match layering::pick(sheen.reflected(wo), 1.0, under(), u) {
                 Choice::Layer { weight } => {
@@ -360,7 +363,7 @@ impl Material {
                 }
             }
         }
-        let (bsdf, w) = self.opaque_bsdf(inputs, shading.n, wo, lambda, u);
+        let (bsdf, w) = self.opaque_bsdf(inputs, reflectance, shading.n, wo, lambda, u);
         Lobe { frame: shading, bsdf, weight: weight * w, over }
     }
 
@@ -375,10 +378,12 @@ impl Material {
     }
 
     /// The BSDF where the surface is there (alpha and coat left aside), at shading normal `n`,
-    /// and the factor on the path's throughput its choice carries.
+    /// and the factor on the path's throughput its choice carries; `reflectance` gives the base
+    /// colour, read only where a lobe needs it.
     fn opaque_bsdf(
         &self,
         inputs: &SurfaceInputs,
+        reflectance: impl FnOnce() -> SampledSpectrum,
         n: Vec3,
         wo: Vec3,
         lambda: &Wavelengths,
@@ -388,7 +393,7 @@ impl Material {
             let ior = self.ior.index(lambda.hero());
             return (if self.thin { Bsdf::ThinDielectric { ior } } else { Bsdf::Dielectric { ior } }, 1.0);
         }
-        let reflectance = self.reflectance(inputs, lambda);
+        let reflectance = reflectance();
         let (metallic, roughness) = self.metallic_roughness(inputs);
         let u_lobe = (u_lobe - self.transmission) / (1.0 - self.transmission);
         let alpha = if roughness < SMOOTH_ROUGHNESS { 0.0 } else { roughness * roughness };
@@ -396,7 +401,8 @@ impl Material {
             if alpha == 0.0 {
                 return (Bsdf::Conductor { f0: reflectance }, 1.0);
             }
-            return (Bsdf::RoughConductor { f0: reflectance, alpha }, 1.0);
+            let scale = conductor::multiple_scattering(reflectance, alpha, n.dot(wo).abs());
+            return (Bsdf::RoughConductor { f0: reflectance, alpha, scale }, 1.0);
         }
         if self.emission.is_some() && reflectance == Vec4::ZERO {
             return (Bsdf::Black, 1.0);
@@ -406,7 +412,7 @@ impl Material {
         };
         let u_lobe = (u_lobe - metallic) / (1.0 - metallic);
         let plastic = Plastic { base: reflectance, coat: specular.coat(inputs, lambda, alpha) };
-        if alpha < GLOSSY_ALPHA {
+        if alpha < NARROW_COAT_ALPHA {
             return plastic::choose_layer(plastic, n, wo, u_lobe);
         }
         (plastic.bsdf(), 1.0)

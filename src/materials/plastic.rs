@@ -195,7 +195,7 @@ impl Plastic {
     }
 }
 
-/// Under a smooth or narrow coat (GGX alpha below [`super::GLOSSY_ALPHA`]), the coat's own
+/// Under a smooth or narrow coat (GGX alpha below [`super::NARROW_COAT_ALPHA`]), the coat's own
 /// reflection or the base, picked by `u` with their shares of the light reflected toward `wo` (at
 /// shading normal `n`), each weighted by one over its probability: the BSDF and the factor on the
 /// path's throughput. The base alone is attenuated as under a smooth coat (the directional albedo
