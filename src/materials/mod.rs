@@ -214,9 +214,8 @@ impl Bsdf {
                 Plastic::new(base, f0, eta, alpha).sample(frame, wo, u, u_lobe, mode)
             }
             Bsdf::Conductor { f0 } => conductor::sample_smooth(f0, n, wo),
-            Bsdf::RoughConductor { f0, alpha, scale } => {
-                conductor::sample_rough(f0, alpha, n, wo, u).map(|s| BsdfSample { weight: s.weight * scale, ..s })
-            }
+            Bsdf::RoughConductor { f0, alpha, scale } => conductor::sample_rough(f0, alpha, n, wo, u)
+                .map(|s| BsdfSample { weight: s.weight * scale, ..s }),
             Bsdf::Dielectric { ior } => dielectric::sample(ior, frame, wo, u_lobe, mode),
             Bsdf::ThinDielectric { ior } => dielectric::sample_thin(ior, frame, wo, u_lobe),
             Bsdf::Sheen { colour, roughness } => sheen::sample(colour, roughness, n, wo, u),
