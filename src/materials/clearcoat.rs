@@ -16,6 +16,7 @@ use std::sync::Arc;
 use glam::{Vec3, Vec4};
 
 use super::inputs::SurfaceInputs;
+use super::layering::{Layer, Over};
 use super::normal_map::NormalMap;
 use super::plastic::{Coat, Plastic};
 use super::{Bsdf, ShadingFrame, SMOOTH_ROUGHNESS};
@@ -72,11 +73,10 @@ pub struct CoatAt {
 }
 
 impl CoatAt {
-    /// The share of light the coat reflects seen from `w` (all of its lobe, delta or not).
-    pub fn reflected(&self, w: Vec3) -> f32 {
-        let mu = self.frame.n.dot(w).abs().min(1.0);
-        let albedo = if self.coat.alpha > 0.0 { self.coat.albedo(mu) } else { self.coat.fresnel(mu) };
-        self.factor * albedo.x
+    /// The coat as a layer a path goes under.
+    pub fn over(&self) -> Over {
+        let Coat { f0, eta, alpha } = self.coat;
+        Over { n: self.frame.n, layer: Layer::Coat { factor: self.factor, f0: f0.x, eta, alpha } }
     }
 
     /// The coat's own reflection as a BSDF: a mirror when smooth, else the microfacet layer over

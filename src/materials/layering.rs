@@ -8,26 +8,55 @@
 //! goes under a layer is re-weighted once its outgoing direction, where a camera path would look
 //! from, is known ([`Over::importance_correction`]).
 
-use glam::Vec3;
+use glam::{Vec3, Vec4};
 
-use super::clearcoat::CoatAt;
-use super::sheen::SheenAt;
+use super::plastic::Coat;
+use super::sheen;
 
-/// A layer a path went under.
+/// A layer a path went under, as much of it as its share of the light needs (a lobe carries two,
+/// and is moved at every hit: 32 bytes each, not the 96 of the whole layer).
 #[derive(Clone, Copy, Debug)]
-pub enum Over {
-    /// A clear coat.
-    Coat(CoatAt),
-    /// A sheen.
-    Sheen(SheenAt),
+pub struct Over {
+    /// The layer's normal.
+    pub n: Vec3,
+    /// What the layer is.
+    pub layer: Layer,
+}
+
+/// A layer's kind and its parameters at one surface point, at the hero wavelength.
+#[derive(Clone, Copy, Debug)]
+pub enum Layer {
+    /// A clear coat of `factor`, normal-incidence reflectance `f0`, index `eta` and GGX `alpha`.
+    Coat {
+        /// How much coat there is.
+        factor: f32,
+        /// Normal-incidence reflectance.
+        f0: f32,
+        /// Index.
+        eta: f32,
+        /// GGX alpha (0: smooth).
+        alpha: f32,
+    },
+    /// A sheen of `colour` (its largest value) and `roughness`.
+    Sheen {
+        /// The colour's largest value.
+        colour: f32,
+        /// Roughness.
+        roughness: f32,
+    },
 }
 
 impl Over {
-    /// The share of light the layer reflects seen from `w`.
+    /// The share of light the layer reflects seen from `w` (all of its lobe, delta or not).
     pub fn reflected(&self, w: Vec3) -> f32 {
-        match self {
-            Over::Coat(coat) => coat.reflected(w),
-            Over::Sheen(sheen) => sheen.reflected(w),
+        let mu = self.n.dot(w).abs().min(1.0);
+        match self.layer {
+            Layer::Coat { factor, f0, eta, alpha } => {
+                let coat = Coat::new(Vec4::splat(f0), eta, alpha);
+                let albedo = if alpha > 0.0 { coat.albedo(mu) } else { coat.fresnel(mu) };
+                factor * albedo.x
+            }
+            Layer::Sheen { colour, roughness } => colour * sheen::albedo(mu, roughness),
         }
     }
 

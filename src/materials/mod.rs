@@ -244,12 +244,14 @@ impl ShadingFrame {
     }
 
     /// Whether a normal map bent the shading normal.
+    #[inline]
     pub fn is_bent(&self) -> bool {
         self.smooth != self.n
     }
 
     /// The shading normal turned to the side of the smooth normal that `w` is on (`n` turned
     /// toward `w` without a normal map: see `normal_map.rs`).
+    #[inline]
     pub fn toward(&self, w: Vec3) -> Vec3 {
         if self.smooth.dot(w) < 0.0 {
             -self.n
@@ -260,6 +262,7 @@ impl ShadingFrame {
 
     /// The factor on diffuse light arriving from `wi`: 1 without a normal map, else its
     /// shadowing ([`normal_map::shadowing`]).
+    #[inline]
     pub fn diffuse_shadowing(&self, wi: Vec3) -> f32 {
         if self.is_bent() {
             normal_map::shadowing(self.smooth, self.n, wi)
@@ -270,6 +273,7 @@ impl ShadingFrame {
 
     /// For a photon arriving from `wi` at a surface with a bent normal, the bent cosine over the
     /// geometric one its density carries (1 without a normal map: see `normal_map.rs`).
+    #[inline]
     pub fn photon_cosine_ratio(&self, wi: Vec3) -> f32 {
         if self.is_bent() {
             let geometric = self.ng.dot(wi).abs();

@@ -23,6 +23,7 @@ use std::sync::Arc;
 
 use glam::{Vec2, Vec3, Vec4};
 
+use super::layering::{Layer, Over};
 use super::{face_toward, BsdfSample, ShadingFrame};
 use crate::sampling::square_to_cosine_hemisphere;
 use crate::spectrum::{RgbSpectrum, SampledSpectrum, Wavelengths};
@@ -80,11 +81,12 @@ pub struct SheenAt {
 }
 
 impl SheenAt {
-    /// The share of light the sheen reflects seen from `w`, as it attenuates the layers under it:
-    /// its colour's largest value times its directional albedo.
-    pub fn reflected(&self, w: Vec3) -> f32 {
-        let mu = self.frame.n.dot(w).abs().min(1.0);
-        self.colour.max_element() * albedo(mu, self.roughness)
+    /// The sheen as a layer a path goes under.
+    pub fn over(&self) -> Over {
+        Over {
+            n: self.frame.n,
+            layer: Layer::Sheen { colour: self.colour.max_element(), roughness: self.roughness },
+        }
     }
 }
 
