@@ -16,7 +16,6 @@ use std::sync::Arc;
 use glam::{Vec3, Vec4};
 
 use super::inputs::SurfaceInputs;
-use super::layering::{Layer, Over};
 use super::normal_map::NormalMap;
 use super::plastic::{Coat, Plastic};
 use super::{Bsdf, ShadingFrame, SMOOTH_ROUGHNESS};
@@ -69,16 +68,10 @@ pub struct CoatAt {
     /// The coat's normals.
     pub frame: ShadingFrame,
     /// The dielectric layer itself.
-    coat: Coat,
+    pub coat: Coat,
 }
 
 impl CoatAt {
-    /// The coat as a layer a path goes under.
-    pub fn over(&self) -> Over {
-        let Coat { f0, eta, alpha } = self.coat;
-        Over { n: self.frame.n, layer: Layer::Coat { factor: self.factor, f0: f0.x, eta, alpha } }
-    }
-
     /// The coat's own reflection as a BSDF: a mirror when smooth, else the microfacet layer over
     /// a black base.
     pub fn bsdf(&self, wo: Vec3) -> Bsdf {

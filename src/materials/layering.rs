@@ -10,8 +10,9 @@
 
 use glam::{Vec3, Vec4};
 
+use super::clearcoat::CoatAt;
 use super::plastic::Coat;
-use super::sheen;
+use super::sheen::{self, SheenAt};
 
 /// A layer a path went under, as much of it as its share of the light needs (a lobe carries two,
 /// and is moved at every hit: 32 bytes each, not the 96 of the whole layer).
@@ -44,6 +45,20 @@ pub enum Layer {
         /// Roughness.
         roughness: f32,
     },
+}
+
+impl From<&CoatAt> for Over {
+    fn from(coat: &CoatAt) -> Self {
+        let Coat { f0, eta, alpha } = coat.coat;
+        Over { n: coat.frame.n, layer: Layer::Coat { factor: coat.factor, f0: f0.x, eta, alpha } }
+    }
+}
+
+impl From<&SheenAt> for Over {
+    fn from(sheen: &SheenAt) -> Self {
+        let layer = Layer::Sheen { colour: sheen.colour.max_element(), roughness: sheen.roughness };
+        Over { n: sheen.frame.n, layer }
+    }
 }
 
 impl Over {

@@ -343,21 +343,23 @@ impl Material {
         let reflectance = || *reflectance.get_or_init(|| self.reflectance(inputs, lambda));
         let under = || reflectance().element_sum() / 4.0;
         if let Some(sheen) = self.sheen.as_ref().and_then(|s| s.at(&inputs.uv, shading, lambda)) {
-            match layering::pick(sheen.over().reflected(wo), 1.0, under(), u) {
+            match layering::pick(Over::from(&sheen).reflected(wo), 1.0, under(), u) {
                 Choice::Layer { weight } => {
                     let bsdf = Bsdf::Sheen { colour: sheen.colour, roughness: sheen.roughness };
                     return Lobe { frame: shading, bsdf, weight, over };
                 }
-                Choice::Under { weight: w, u: rest } => (weight, u, over[0]) = (w, rest, Some(sheen.over())),
+                Choice::Under { weight: w, u: rest } => {
+                    (weight, u, over[0]) = (w, rest, Some(Over::from(&sheen)))
+                }
             }
         }
         if let Some(coat) = self.clearcoat.as_ref().and_then(|c| c.at(inputs, frame)) {
-            match layering::pick(coat.over().reflected(wo), coat.factor, under(), u) {
+            match layering::pick(Over::from(&coat).reflected(wo), coat.factor, under(), u) {
                 Choice::Layer { weight: w } => {
                     return Lobe { frame: coat.frame, bsdf: coat.bsdf(wo), weight: weight * w, over };
                 }
                 Choice::Under { weight: w, u: rest } => {
-                    (weight, u, over[1]) = (weight * w, rest, Some(coat.over()))
+                    (weight, u, over[1]) = (weight * w, rest, Some(Over::from(&coat)))
                 }
             }
         }

@@ -23,7 +23,6 @@ use std::sync::Arc;
 
 use glam::{Vec2, Vec3, Vec4};
 
-use super::layering::{Layer, Over};
 use super::{face_toward, BsdfSample, ShadingFrame};
 use crate::sampling::square_to_cosine_hemisphere;
 use crate::spectrum::{RgbSpectrum, SampledSpectrum, Wavelengths};
@@ -74,20 +73,10 @@ impl Sheen {
 pub struct SheenAt {
     /// Its colour at the path's wavelengths, in [0, 1].
     pub colour: SampledSpectrum,
-    /// Its roughness (Charlie's `a` is its square).
+    /// Its roughness.
     pub roughness: f32,
     /// The normals it follows.
     pub frame: ShadingFrame,
-}
-
-impl SheenAt {
-    /// The sheen as a layer a path goes under.
-    pub fn over(&self) -> Over {
-        Over {
-            n: self.frame.n,
-            layer: Layer::Sheen { colour: self.colour.max_element(), roughness: self.roughness },
-        }
-    }
 }
 
 /// The directional albedo of a white sheen of roughness `r` seen at cosine `mu`: the authors'
