@@ -197,7 +197,7 @@ impl Bsdf {
         }
     }
 
-    /// Samples `wi` for `wo` at a surface of shading normal `n` and geometric normal `ng`.
+    /// Samples `wi` for `wo` in `frame`, for `mode`'s direction of travel.
     pub fn sample(
         &self,
         frame: ShadingFrame,
