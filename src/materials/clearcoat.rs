@@ -76,7 +76,7 @@ impl CoatAt {
     /// a black base.
     pub fn bsdf(&self, wo: Vec3) -> Bsdf {
         match self.coat.alpha {
-            0.0 => Bsdf::Mirror { weight: self.coat.fresnel(self.frame.n.dot(wo).abs().min(1.0)) },
+            0.0 => Bsdf::Mirror { weight: self.coat.fresnel(self.frame.n().dot(wo).abs().min(1.0)) },
             _ => Plastic { base: Vec4::ZERO, coat: self.coat }.bsdf(),
         }
     }

@@ -25,8 +25,8 @@ pub fn fresnel_dielectric(cos_i: f32, eta: f32) -> f32 {
 /// outside) decides which side `wo` is on, the shading normal bends the ray, so a tessellated
 /// sphere focuses light like a smooth one.
 pub fn sample(ior: f32, frame: ShadingFrame, wo: Vec3, u: f32, mode: Transport) -> Option<BsdfSample> {
-    let outward = face_toward(frame.n, frame.ng);
-    let entering = frame.ng.dot(wo) > 0.0;
+    let outward = face_toward(frame.n(), frame.ng());
+    let entering = frame.ng().dot(wo) > 0.0;
     let (n, eta) = if entering { (outward, ior) } else { (-outward, 1.0 / ior) };
     let cos_i = n.dot(wo).min(1.0);
     let f = fresnel_dielectric(cos_i, eta);
@@ -48,7 +48,7 @@ pub fn sample(ior: f32, frame: ShadingFrame, wo: Vec3, u: f32, mode: Transport) 
 /// ThinDielectricBxDF); the rest passes straight through, unbent and unscaled (the wall's two
 /// refractions cancel).
 pub fn sample_thin(ior: f32, frame: ShadingFrame, wo: Vec3, u: f32) -> Option<BsdfSample> {
-    let n = face_toward(frame.n, wo);
+    let n = face_toward(frame.n(), wo);
     let r = fresnel_dielectric(n.dot(wo).min(1.0), ior);
     let reflected = if r < 1.0 { r + (1.0 - r) * (1.0 - r) * r / (1.0 - r * r) } else { 1.0 };
     let wi = if u < reflected { reflect(wo, n) } else { -wo };

@@ -50,14 +50,14 @@ pub enum Layer {
 impl From<&CoatAt> for Over {
     fn from(coat: &CoatAt) -> Self {
         let Coat { f0, eta, alpha } = coat.coat;
-        Over { n: coat.frame.n, layer: Layer::Coat { factor: coat.factor, f0: f0.x, eta, alpha } }
+        Over { n: coat.frame.n(), layer: Layer::Coat { factor: coat.factor, f0: f0.x, eta, alpha } }
     }
 }
 
 impl From<&SheenAt> for Over {
     fn from(sheen: &SheenAt) -> Self {
         let layer = Layer::Sheen { colour: sheen.colour.max_element(), roughness: sheen.roughness };
-        Over { n: sheen.frame.n, layer }
+        Over { n: sheen.frame.n(), layer }
     }
 }
 

@@ -363,7 +363,7 @@ impl Material {
                 }
             }
         }
-        let (bsdf, w) = self.opaque_bsdf(inputs, reflectance, shading.n, wo, lambda, u);
+        let (bsdf, w) = self.opaque_bsdf(inputs, reflectance, shading.n(), wo, lambda, u);
         Lobe { frame: shading, bsdf, weight: weight * w, over }
     }
 

@@ -43,17 +43,17 @@ impl NormalMap {
         if t == Vec3::ZERO {
             return frame;
         }
-        let n = frame.n;
+        let n = frame.n();
         // Gram-Schmidt: the interpolated tangent made perpendicular to the shading normal.
         let t = (t - n * n.dot(t)).normalize_or_zero();
         let b = n.cross(t) * inputs.tangent.w.signum();
         let texel = self.texture.eval(&inputs.uv) * 2.0 - Vec4::ONE;
         let local = Vec3::new(texel.x * self.scale, texel.y * self.scale, texel.z);
         let bent = (t * local.x + b * local.y + n * local.z).normalize_or_zero();
-        if bent == Vec3::ZERO || !bent.is_finite() || bent.dot(frame.ng) * n.dot(frame.ng) <= 0.0 {
+        if bent == Vec3::ZERO || !bent.is_finite() || bent.dot(frame.ng()) * n.dot(frame.ng()) <= 0.0 {
             return frame;
         }
-        ShadingFrame { n: bent, ..frame }
+        ShadingFrame::bent(bent, frame.ng(), frame.smooth())
     }
 }
 

@@ -7,7 +7,7 @@ use glam::Vec3;
 use super::renderer::{PassStats, Renderer, VisiblePoint};
 use super::see_through;
 use crate::geometry::offset_origin;
-use crate::materials::{BsdfSample, ShadingFrame, Transport};
+use crate::materials::{BsdfSample, Transport};
 use crate::sampling::PixelSampler;
 use crate::scene::NOT_A_LIGHT;
 use crate::spectrum::{SampledSpectrum, Wavelengths};
@@ -78,7 +78,7 @@ impl DirectLight<'_> {
         let Some(sample) = light.sample_incident(point.p, rng.next_2d(), wavelengths) else {
             return DirectTerm::ZERO;
         };
-        let ShadingFrame { n, ng, .. } = point.frame;
+        let (n, ng) = (point.frame.n(), point.frame.ng());
         if ng.dot(sample.wi) * ng.dot(point.wo) <= 0.0 {
             return DirectTerm::ZERO;
         }
@@ -119,11 +119,11 @@ impl DirectLight<'_> {
         let Some(sample) = point.bsdf.sample(point.frame, point.wo, u, u_lobe, Transport::Radiance) else {
             return DirectTerm::ZERO;
         };
-        if sample.pdf <= 0.0 || point.frame.ng.dot(sample.wi) * point.frame.ng.dot(point.wo) <= 0.0 {
+        if sample.pdf <= 0.0 || point.frame.ng().dot(sample.wi) * point.frame.ng().dot(point.wo) <= 0.0 {
             return DirectTerm::ZERO;
         }
         stats.shadow_rays += 1;
-        let origin = offset_origin(point.p, point.frame.ng, sample.wi, point.scale());
+        let origin = offset_origin(point.p, point.frame.ng(), sample.wi, point.scale());
         let light_pdf = |index: usize, q: Vec3| {
             renderer.light_choice.probability(index) * scene.lights[index].pdf_incident(point.p, sample.wi, q)
         };
@@ -157,7 +157,7 @@ impl DirectLight<'_> {
         }
         let surface = scene.surface(&hit, wavelengths);
         let material = &scene.materials[surface.material as usize];
-        let radiance = material.emitted(&surface.inputs, wavelengths, surface.frame.ng, -sample.wi);
+        let radiance = material.emitted(&surface.inputs, wavelengths, surface.frame.ng(), -sample.wi);
         let value =
             sample.weight * radiance * power_heuristic(sample.pdf, light_pdf(light as usize, surface.p));
         DirectTerm { value, ray }

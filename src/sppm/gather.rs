@@ -52,7 +52,7 @@ impl Kernel {
     /// The wall through `at` of normal `ng` (a photon's surface, meeting the visible point's at
     /// an edge) and the kernel mass its plane cuts off the disc around `vp` (in `vp`'s plane).
     fn wall(&self, ng: Vec3, at: Vec3, vp: &VisiblePoint) -> Wall {
-        let n = vp.frame.ng;
+        let n = vp.frame.ng();
         let sine = (ng - ng.dot(n) * n).length();
         let height = (vp.p - at).dot(ng);
         let mass = if sine < 0.5 { 0.0 } else { kernel_mass_beyond(height.abs() / sine / self.r2.sqrt()) };
@@ -185,7 +185,7 @@ impl PhotonSet {
         };
         if sums.kernel != SampledSpectrum::ZERO {
             let radius = self.kernel.r2.sqrt();
-            let edges = self.open_edges.distances(vp.p, vp.frame.ng, radius);
+            let edges = self.open_edges.distances(vp.p, vp.frame.ng(), radius);
             sums.cut = sums.cut.max(edges.map(|d| kernel_mass_beyond(d / radius)));
         }
         PixelEstimate {
@@ -318,14 +318,14 @@ impl<'a> Weigher<'a> {
     fn new(kernel: &'a Kernel, vp: &'a VisiblePoint, known_walls: Option<[Wall; 3]>) -> Self {
         let diffuse = match vp.bsdf {
             Bsdf::Diffuse { albedo } if !vp.frame.is_bent() => {
-                Some((vp.frame.n.dot(vp.wo), albedo * FRAC_1_PI))
+                Some((vp.frame.n().dot(vp.wo), albedo * FRAC_1_PI))
             }
             _ => None,
         };
         Weigher {
             kernel,
             vp,
-            front: vp.frame.ng * vp.frame.ng.dot(vp.wo).signum(),
+            front: vp.frame.ng() * vp.frame.ng().dot(vp.wo).signum(),
             diffuse,
             hero_only_scale: if vp.hero_only() { 1.0 / LANES as f32 } else { 1.0 },
             flux_kernel: SampledSpectrum::ZERO,
@@ -356,7 +356,7 @@ impl<'a> Weigher<'a> {
         }
         let flux = if photon.hero_only { photon.flux * self.hero_only_scale } else { photon.flux };
         let weighted = match self.diffuse {
-            Some((cos_wo, _)) if photon.wi.dot(self.vp.frame.n) * cos_wo > 0.0 => flux,
+            Some((cos_wo, _)) if photon.wi.dot(self.vp.frame.n()) * cos_wo > 0.0 => flux,
             Some(_) => return,
             None => {
                 let frame = self.vp.frame;

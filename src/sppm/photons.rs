@@ -6,7 +6,7 @@
 //! before it is traced and resume the path later from any saved state, drawing exactly the random
 //! numbers it would have drawn (reuse across frames needs both).
 
-use glam::Vec3;
+use glam::{Vec3, Vec3A};
 
 use rayon::prelude::*;
 
@@ -34,10 +34,11 @@ pub struct Photon {
 /// A photon path about to trace its next segment.
 #[derive(Clone)]
 pub struct PhotonState {
-    /// Where the segment starts.
-    pub origin: Vec3,
+    /// Where the segment starts (16-byte aligned, as is the direction: a state is written
+    /// whole and read whole, and 12-byte fields read as 16-byte words stall the store buffer).
+    pub origin: Vec3A,
     /// Its unit direction.
-    pub direction: Vec3,
+    pub direction: Vec3A,
     /// The flux carried.
     pub flux: SampledSpectrum,
     /// The path carries its hero wavelength alone.
@@ -69,8 +70,8 @@ pub fn start_photon(renderer: &Renderer, pass: &PassSamples, k: u64) -> Option<(
         renderer.scene.lights[index].emit_photon(rng.next_2d(), rng.next_2d(), &pass.wavelengths)?;
     let flux = emitted.flux / (p_light * renderer.settings.photons_per_pass as f32);
     let state = PhotonState {
-        origin: emitted.origin,
-        direction: emitted.direction,
+        origin: emitted.origin.into(),
+        direction: emitted.direction.into(),
         flux,
         hero_only: false,
         depth: 0,
@@ -103,20 +104,20 @@ pub fn continue_photon(
     let first_stored = out.len();
     while state.depth < MAX_DEPTH {
         stats.photon_rays += 1;
-        let hit = renderer.accel.intersect_opaque(state.origin, state.direction, f32::INFINITY);
+        let hit = renderer.accel.intersect_opaque(state.origin.into(), state.direction.into(), f32::INFINITY);
         watch(&state, hit.map_or(f32::INFINITY, |h| h.t), out.len() - first_stored);
         let Some(hit) = hit else {
             break;
         };
         let surface = scene.surface(&hit, &pass.wavelengths);
         let material = &scene.materials[surface.material as usize];
-        let wo = -state.direction;
+        let wo = -Vec3::from(state.direction);
         let rng = &mut state.rng;
         let lobe = material.lobe(&surface.inputs, surface.frame, wo, &pass.wavelengths, rng.next_1d());
-        let (frame, bsdf) = (lobe.frame, lobe.bsdf);
-        let lands = bsdf.is_gathered_at() || (bsdf != Bsdf::PassThrough && material.gathers_photons());
+        let (frame, bsdf) = (lobe.frame, &lobe.bsdf);
+        let lands = bsdf.is_gathered_at() || (*bsdf != Bsdf::PassThrough && material.gathers_photons());
         if state.scattered && lands {
-            let ng = if surface.frame.ng.dot(wo) < 0.0 { -surface.frame.ng } else { surface.frame.ng };
+            let ng = if surface.frame.ng().dot(wo) < 0.0 { -surface.frame.ng() } else { surface.frame.ng() };
             out.push(Photon { p: surface.p, wi: wo, ng, flux: state.flux, hero_only: state.hero_only });
             stats.photons_stored += 1;
         }
@@ -134,15 +135,15 @@ pub fn continue_photon(
         if rng.next_1d() >= survive {
             break;
         }
-        if !state.hero_only && material.separates_wavelengths(&bsdf) {
+        if !state.hero_only && material.separates_wavelengths(bsdf) {
             state.flux = hero_only(state.flux);
             state.hero_only = true;
         }
         state.flux *= weight / survive;
-        state.origin = offset_origin(surface.p, surface.frame.ng, sample.wi, surface.scale);
-        state.direction = sample.wi;
+        state.origin = offset_origin(surface.p, surface.frame.ng(), sample.wi, surface.scale).into();
+        state.direction = sample.wi.into();
         state.depth += 1;
-        state.scattered |= bsdf != Bsdf::PassThrough;
+        state.scattered |= *bsdf != Bsdf::PassThrough;
     }
     stats
 }

@@ -213,7 +213,7 @@ fn trace_shared_photon(
     }
     let mut watched = Vec::new();
     let stats = continue_photon(statics, pass, state, &mut traced.photons, |state, t_hit, stored_before| {
-        let ray = ShadowRay { origin: state.origin, direction: state.direction, t_max: t_hit };
+        let ray = ShadowRay { origin: state.origin.into(), direction: state.direction.into(), t_max: t_hit };
         if swept.meets(ray) {
             watched.push(Watched { state: state.clone(), ray, stored_before });
         }
@@ -290,7 +290,7 @@ fn trace_shared_eyes(statics: &Renderer, pass: &PassSamples, swept: Swept) -> (V
             let (end, stats) = continue_eye_path(statics, pass, state, |event| {
                 let (state, ray) = match event {
                     EyeEvent::Segment(state, t_hit) => {
-                        (state, ShadowRay { origin: state.origin, direction: state.direction, t_max: t_hit })
+                        (state, ShadowRay { origin: state.origin.into(), direction: state.direction.into(), t_max: t_hit })
                     }
                     EyeEvent::Shadow(ray) => (&start, ray),
                 };

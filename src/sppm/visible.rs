@@ -23,7 +23,7 @@
 //! Like photon paths, an eye path is an [`EyeState`] advanced segment by segment, which a caller
 //! can watch and resume (reuse across frames).
 
-use glam::{Vec2, Vec3};
+use glam::{Vec2, Vec3, Vec3A};
 
 use super::direct::{DirectLight, DirectTerm, ShadowRay};
 use super::renderer::{PassSamples, PassStats, Renderer, VisiblePoint, MAX_DEPTH};
@@ -44,10 +44,11 @@ pub struct EyeResult {
 /// An eye path about to trace its next segment.
 #[derive(Clone)]
 pub struct EyeState {
-    /// Where the segment starts.
-    pub origin: Vec3,
+    /// Where the segment starts (16-byte aligned, as is the direction: a state is written
+    /// whole and read whole, and 12-byte fields read as 16-byte words stall the store buffer).
+    pub origin: Vec3A,
     /// Its unit direction.
-    pub direction: Vec3,
+    pub direction: Vec3A,
     /// Throughput from the camera.
     pub beta: SampledSpectrum,
     /// The path carries its hero wavelength alone (it passed a dispersive refraction).
@@ -93,8 +94,8 @@ pub fn start_eye_path(renderer: &Renderer, pass: &PassSamples, pixel: usize) -> 
     };
     (
         EyeState {
-            origin,
-            direction,
+            origin: origin.into(),
+            direction: direction.into(),
             beta: SampledSpectrum::ONE,
             hero_only: false,
             radiance: SampledSpectrum::ZERO,
@@ -138,20 +139,20 @@ pub fn continue_eye_path(
     let mut radiance_before = SampledSpectrum::ZERO;
     while state.depth < MAX_DEPTH {
         stats.eye_rays += 1;
-        let hit = renderer.accel.intersect(state.origin, state.direction, f32::INFINITY);
+        let hit = renderer.accel.intersect(state.origin.into(), state.direction.into(), f32::INFINITY);
         watch(EyeEvent::Segment(&state, hit.map_or(f32::INFINITY, |h| h.t)));
         let Some(hit) = hit else {
             if !state.lights_sampled {
-                state.radiance += state.beta * scene.escaped_radiance(state.direction, &pass.wavelengths);
+                state.radiance += state.beta * scene.escaped_radiance(state.direction.into(), &pass.wavelengths);
             }
             break;
         };
         let surface = scene.surface(&hit, &pass.wavelengths);
         let material = &scene.materials[surface.material as usize];
-        let wo = -state.direction;
+        let wo = -Vec3::from(state.direction);
         if !state.lights_sampled {
             state.radiance +=
-                state.beta * material.emitted(&surface.inputs, &pass.wavelengths, surface.frame.ng, wo);
+                state.beta * material.emitted(&surface.inputs, &pass.wavelengths, surface.frame.ng(), wo);
         }
         let rng = &mut state.rng;
         let Lobe { frame, bsdf, weight, .. } =
@@ -187,8 +188,8 @@ pub fn continue_eye_path(
             state.hero_only = true;
         }
         state.beta *= sample.weight;
-        state.origin = offset_origin(surface.p, surface.frame.ng, sample.wi, surface.scale);
-        state.direction = sample.wi;
+        state.origin = offset_origin(surface.p, surface.frame.ng(), sample.wi, surface.scale).into();
+        state.direction = sample.wi.into();
         state.depth += 1;
     }
     let result = EyeResult { radiance: state.radiance, point };
