@@ -178,9 +178,6 @@ def material_warnings(material):
         socket = surface.inputs.get(name)
         if socket is not None and (socket.is_linked or abs(socket.default_value - neutral) > 1e-6):
             warnings.append(f"material '{material.name}': {name} is not supported and is ignored")
-    transmission = surface.inputs["Transmission Weight"].default_value
-    if transmission > 0 and surface.inputs["Roughness"].default_value > 0.05:
-        warnings.append(f"material '{material.name}': rough transmission renders as smooth glass")
     return warnings
 
 

@@ -1,11 +1,13 @@
 //! A smooth dielectric boundary: exact Fresnel reflectance, Snell refraction and total internal
 //! reflection. Reflection or refraction is chosen with probability F, so the weight is 1, except
 //! that radiance (camera paths) is scaled by 1 / eta^2 on refraction while importance (photons)
-//! is not: the BTDF is not symmetric (Veach 1997, 5.2; pbrt-v4 section 9.5.2).
+//! is not: the BTDF is not symmetric (Veach 1997, 5.2; pbrt-v4 section 9.5.2). Refraction is
+//! multiplied by the material's transmission tint.
 
 use glam::{Vec3, Vec4};
 
 use super::{face_toward, microfacet::reflect, BsdfSample, ShadingFrame, Transport};
+use crate::spectrum::SampledSpectrum;
 
 /// Unpolarised Fresnel reflectance for `cos_i` (cosine on the incident side) and relative index
 /// `eta` (transmitted over incident).
@@ -24,7 +26,14 @@ pub fn fresnel_dielectric(cos_i: f32, eta: f32) -> f32 {
 /// Reflects or refracts `wo` at a boundary with normals `frame`: the geometric normal (pointing
 /// outside) decides which side `wo` is on, the shading normal bends the ray, so a tessellated
 /// sphere focuses light like a smooth one.
-pub fn sample(ior: f32, frame: ShadingFrame, wo: Vec3, u: f32, mode: Transport) -> Option<BsdfSample> {
+pub fn sample(
+    ior: f32,
+    tint: SampledSpectrum,
+    frame: ShadingFrame,
+    wo: Vec3,
+    u: f32,
+    mode: Transport,
+) -> Option<BsdfSample> {
     let outward = face_toward(frame.n(), frame.ng());
     let entering = frame.ng().dot(wo) > 0.0;
     let (n, eta) = if entering { (outward, ior) } else { (-outward, 1.0 / ior) };
@@ -40,19 +49,25 @@ pub fn sample(ior: f32, frame: ShadingFrame, wo: Vec3, u: f32, mode: Transport) 
         Transport::Radiance => 1.0 / (eta * eta),
         Transport::Importance => 1.0,
     };
-    Some(BsdfSample { wi, weight: Vec4::splat(weight), pdf: 0.0, is_delta: true })
+    Some(BsdfSample { wi, weight: tint * weight, pdf: 0.0, is_delta: true })
 }
 
 /// Reflects or transmits `wo` at a thin dielectric wall of index `ior`: the light reflected by its
 /// two faces, inner reflections included, is `R + T^2 R / (1 - R^2)` of it (pbrt-v4's
 /// ThinDielectricBxDF); the rest passes straight through, unbent and unscaled (the wall's two
-/// refractions cancel).
-pub fn sample_thin(ior: f32, frame: ShadingFrame, wo: Vec3, u: f32) -> Option<BsdfSample> {
+/// refractions cancel), times `tint`.
+pub fn sample_thin(
+    ior: f32,
+    tint: SampledSpectrum,
+    frame: ShadingFrame,
+    wo: Vec3,
+    u: f32,
+) -> Option<BsdfSample> {
     let n = face_toward(frame.n(), wo);
     let r = fresnel_dielectric(n.dot(wo).min(1.0), ior);
     let reflected = if r < 1.0 { r + (1.0 - r) * (1.0 - r) * r / (1.0 - r * r) } else { 1.0 };
-    let wi = if u < reflected { reflect(wo, n) } else { -wo };
-    Some(BsdfSample { wi, weight: Vec4::ONE, pdf: 0.0, is_delta: true })
+    let (wi, weight) = if u < reflected { (reflect(wo, n), Vec4::ONE) } else { (-wo, tint) };
+    Some(BsdfSample { wi, weight, pdf: 0.0, is_delta: true })
 }
 
 #[cfg(test)]
@@ -70,13 +85,15 @@ mod tests {
     fn a_thin_wall_transmits_unbent_and_reflects_both_faces() {
         let wo = Vec3::new(0.6, 0.0, 0.8);
         let frame = ShadingFrame::new(Vec3::Z, Vec3::Z);
-        let through = sample_thin(1.5, frame, wo, 0.999).unwrap();
+        let through = sample_thin(1.5, Vec4::ONE, frame, wo, 0.999).unwrap();
         assert!((through.wi + wo).length() < 1e-6, "{:?}", through.wi);
-        let back = sample_thin(1.5, frame, wo, 0.0).unwrap();
+        let back = sample_thin(1.5, Vec4::ONE, frame, wo, 0.0).unwrap();
         assert!((back.wi - Vec3::new(-0.6, 0.0, 0.8)).length() < 1e-6);
         // At normal incidence a 1.5 wall reflects 2R / (1 + R) with R = 0.04.
         let reflected = (0..10_000)
-            .filter(|&i| sample_thin(1.5, frame, Vec3::Z, (i as f32 + 0.5) / 1e4).unwrap().wi.z > 0.0)
+            .filter(|&i| {
+                sample_thin(1.5, Vec4::ONE, frame, Vec3::Z, (i as f32 + 0.5) / 1e4).unwrap().wi.z > 0.0
+            })
             .count();
         assert!((reflected as f32 / 1e4 - 0.08 / 1.04).abs() < 2e-4, "{reflected}");
     }
@@ -85,7 +102,7 @@ mod tests {
     fn refraction_obeys_snell() {
         let wo = Vec3::new(0.6, 0.0, 0.8);
         let frame = ShadingFrame::new(Vec3::Z, Vec3::Z);
-        let s = sample(1.5, frame, wo, 0.99, Transport::Importance).unwrap();
+        let s = sample(1.5, Vec4::ONE, frame, wo, 0.99, Transport::Importance).unwrap();
         let sin_t = (1.0 - s.wi.z * s.wi.z).sqrt();
         assert!((sin_t * 1.5 - 0.6).abs() < 1e-5);
         assert!(s.wi.z < 0.0 && s.wi.x < 0.0);

@@ -273,7 +273,11 @@ impl Material {
     /// Whether `bsdf`, resolved from this material, sends each wavelength its own way: a path
     /// through it can carry only its hero wavelength.
     pub fn separates_wavelengths(&self, bsdf: &Bsdf) -> bool {
-        self.ior.is_dispersive() && matches!(bsdf, Bsdf::Dielectric { .. } | Bsdf::ThinDielectric { .. })
+        self.ior.is_dispersive()
+            && matches!(
+                bsdf,
+                Bsdf::Dielectric { .. } | Bsdf::ThinDielectric { .. } | Bsdf::RoughDielectric { .. }
+            )
     }
 
     /// Whether light passes through unchanged (a thin fully transmissive wall of index 1, as area
@@ -389,14 +393,13 @@ impl Material {
         lambda: &Wavelengths,
         u_lobe: f32,
     ) -> (Bsdf, f32) {
-        if u_lobe < self.transmission {
-            let ior = self.ior.index(lambda.hero());
-            return (if self.thin { Bsdf::ThinDielectric { ior } } else { Bsdf::Dielectric { ior } }, 1.0);
-        }
         let reflectance = reflectance();
         let (metallic, roughness) = self.metallic_roughness(inputs);
-        let u_lobe = (u_lobe - self.transmission) / (1.0 - self.transmission);
         let alpha = if roughness < SMOOTH_ROUGHNESS { 0.0 } else { roughness * roughness };
+        if u_lobe < self.transmission {
+            return (transmission_bsdf(self.ior.index(lambda.hero()), alpha, self.thin, reflectance), 1.0);
+        }
+        let u_lobe = (u_lobe - self.transmission) / (1.0 - self.transmission);
         if u_lobe < metallic {
             if alpha == 0.0 {
                 return (Bsdf::Conductor { f0: reflectance }, 1.0);
@@ -416,5 +419,18 @@ impl Material {
             return plastic::choose_layer(plastic, n, wo, u_lobe);
         }
         (plastic.bsdf(), 1.0)
+    }
+}
+
+/// The transmissive lobe of index `ior` and GGX `alpha` for a material of base colour `base`: a
+/// thin wall (smooth whatever its roughness) tints what passes by the base colour, a closed
+/// mesh's boundary by its square root, so that light through both boundaries is tinted by the
+/// base colour (Cycles' Principled BSDF).
+fn transmission_bsdf(ior: f32, alpha: f32, thin: bool, base: SampledSpectrum) -> Bsdf {
+    let tint = base.max(Vec4::ZERO);
+    match (thin, alpha) {
+        (true, _) => Bsdf::ThinDielectric { ior, tint },
+        (false, 0.0) => Bsdf::Dielectric { ior, tint: tint.sqrt() },
+        (false, _) => Bsdf::RoughDielectric { ior, alpha, tint: tint.sqrt() },
     }
 }

@@ -29,10 +29,6 @@ pub fn material_warnings(m: &gltf::Material) -> Vec<String> {
         .map(|k| format!("{k} is not rendered"))
         .collect();
     unrendered.extend(unrendered_textures(m));
-    let rough = m.pbr_metallic_roughness().roughness_factor() > 0.0;
-    if rough && m.transmission().is_some_and(|t| t.transmission_factor() > 0.0) {
-        unrendered.push("rough transmission is not rendered (it renders as smooth glass)".into());
-    }
     unrendered.into_iter().map(|what| format!("material '{name}': {what}")).collect()
 }
 

@@ -289,9 +289,14 @@ fn trace_shared_eyes(statics: &Renderer, pass: &PassSamples, swept: Swept) -> (V
             let mut watched = Vec::new();
             let (end, stats) = continue_eye_path(statics, pass, state, |event| {
                 let (state, ray) = match event {
-                    EyeEvent::Segment(state, t_hit) => {
-                        (state, ShadowRay { origin: state.origin.into(), direction: state.direction.into(), t_max: t_hit })
-                    }
+                    EyeEvent::Segment(state, t_hit) => (
+                        state,
+                        ShadowRay {
+                            origin: state.origin.into(),
+                            direction: state.direction.into(),
+                            t_max: t_hit,
+                        },
+                    ),
                     EyeEvent::Shadow(ray) => (&start, ray),
                 };
                 if swept.meets(ray) {

@@ -143,7 +143,8 @@ pub fn continue_eye_path(
         watch(EyeEvent::Segment(&state, hit.map_or(f32::INFINITY, |h| h.t)));
         let Some(hit) = hit else {
             if !state.lights_sampled {
-                state.radiance += state.beta * scene.escaped_radiance(state.direction.into(), &pass.wavelengths);
+                state.radiance +=
+                    state.beta * scene.escaped_radiance(state.direction.into(), &pass.wavelengths);
             }
             break;
         };
