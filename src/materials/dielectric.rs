@@ -23,6 +23,25 @@ pub fn fresnel_dielectric(cos_i: f32, eta: f32) -> f32 {
     (r_parallel * r_parallel + r_perpendicular * r_perpendicular) / 2.0
 }
 
+/// The shading normal turned to the side `wo` is on (the geometric normal, pointing outside,
+/// decides which side that is), and the index of the far side over the near one.
+pub fn side(ior: f32, frame: ShadingFrame, wo: Vec3) -> (Vec3, f32) {
+    let outward = face_toward(frame.n(), frame.ng());
+    if frame.ng().dot(wo) > 0.0 {
+        (outward, ior)
+    } else {
+        (-outward, 1.0 / ior)
+    }
+}
+
+/// `wo` refracted through a surface of unit normal `n` on its side into relative index `eta`, or
+/// `None` where it is totally reflected.
+pub fn refract(wo: Vec3, n: Vec3, eta: f32) -> Option<Vec3> {
+    let cos_i = wo.dot(n);
+    let sin2_t = (1.0 - cos_i * cos_i) / (eta * eta);
+    (sin2_t < 1.0).then(|| (-wo / eta + (cos_i / eta - (1.0 - sin2_t).sqrt()) * n).normalize())
+}
+
 /// Reflects or refracts `wo` at a boundary with normals `frame`: the geometric normal (pointing
 /// outside) decides which side `wo` is on, the shading normal bends the ray, so a tessellated
 /// sphere focuses light like a smooth one.
@@ -34,17 +53,12 @@ pub fn sample(
     u: f32,
     mode: Transport,
 ) -> Option<BsdfSample> {
-    let outward = face_toward(frame.n(), frame.ng());
-    let entering = frame.ng().dot(wo) > 0.0;
-    let (n, eta) = if entering { (outward, ior) } else { (-outward, 1.0 / ior) };
-    let cos_i = n.dot(wo).min(1.0);
-    let f = fresnel_dielectric(cos_i, eta);
+    let (n, eta) = side(ior, frame, wo);
+    let f = fresnel_dielectric(n.dot(wo).min(1.0), eta);
     if u < f {
         return Some(BsdfSample { wi: reflect(wo, n), weight: Vec4::ONE, pdf: 0.0, is_delta: true });
     }
-    let sin2_t = (1.0 - cos_i * cos_i) / (eta * eta);
-    let cos_t = (1.0 - sin2_t).max(0.0).sqrt();
-    let wi = (-wo / eta + (cos_i / eta - cos_t) * n).normalize();
+    let wi = refract(wo, n, eta)?;
     let weight = match mode {
         Transport::Radiance => 1.0 / (eta * eta),
         Transport::Importance => 1.0,

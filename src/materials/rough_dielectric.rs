@@ -19,7 +19,7 @@
 
 use glam::{Vec2, Vec3};
 
-use super::dielectric::fresnel_dielectric;
+use super::dielectric::{fresnel_dielectric, refract, side};
 use super::microfacet::{self, distribution, masking, masking_shadowing, reflect};
 use super::{face_toward, BsdfSample, ShadingFrame, Transport};
 use crate::spectrum::SampledSpectrum;
@@ -35,29 +35,11 @@ pub struct RoughDielectric {
     pub tint: SampledSpectrum,
 }
 
-/// The frame of the shading normal on `wo`'s side, and the index of the far side over the near.
-fn side(ior: f32, frame: ShadingFrame, wo: Vec3) -> (Vec3, f32) {
-    let outward = face_toward(frame.n(), frame.ng());
-    if frame.ng().dot(wo) > 0.0 {
-        (outward, ior)
-    } else {
-        (-outward, 1.0 / ior)
-    }
-}
-
 /// The microfacet normal through which `wi` refracts from `wo` (local, `wo.z > 0 > wi.z`), if it
 /// faces both.
 fn refracting_normal(eta: f32, wo: Vec3, wi: Vec3) -> Option<Vec3> {
     let h = face_toward((wo + wi * eta).normalize_or_zero(), Vec3::Z);
     (h != Vec3::ZERO && h.dot(wo) > 0.0 && h.dot(wi) < 0.0).then_some(h)
-}
-
-/// `wo` refracted through microfacet normal `h` into relative index `eta`, or `None` where it is
-/// totally reflected.
-fn refract(wo: Vec3, h: Vec3, eta: f32) -> Option<Vec3> {
-    let cos_i = wo.dot(h);
-    let sin2_t = (1.0 - cos_i * cos_i) / (eta * eta);
-    (sin2_t < 1.0).then(|| (-wo / eta + (cos_i / eta - (1.0 - sin2_t).sqrt()) * h).normalize())
 }
 
 /// The factor on refracted light for `mode`.
