@@ -70,6 +70,8 @@ fn unrendered_features_are_named() {
     gltf.sphere("Body", [0.0, 0.0, 0.0], 1.0, 8, paint);
     let decal = gltf.material(json!({"name": "Decal", "alphaMode": "BLEND"}));
     gltf.mesh("Sticker", &[[[0.0, 0.0, 1.1], [0.2, 0.0, 1.1], [0.0, 0.2, 1.1]]], decal);
+    let neon = gltf.material(json!({"name": "Neon", "alphaMode": "MASK", "emissiveFactor": [1.0, 0.2, 0.1]}));
+    gltf.mesh("Sign", &[[[0.0, 0.0, -1.1], [0.2, 0.0, -1.1], [0.0, 0.2, -1.1]]], neon);
     gltf.attribute("COLOR_0", &[[1.0f32, 1.0, 1.0, 0.5]; 3].concat(), 4, "VEC4");
     gltf.camera([0.0, 0.0, 4.0], [0.0, 0.0, -1.0], 0.5);
     gltf.scene_extras(json!({"world": {"color": [1.0, 1.0, 1.0], "strength": 1.0}}));
@@ -78,6 +80,8 @@ fn unrendered_features_are_named() {
     let stderr = String::from_utf8_lossy(&output.stderr);
     assert!(output.status.success(), "{stderr}");
     let expected = "material 'Car paint': KHR_materials_iridescence is not rendered";
+    assert!(stderr.contains(expected), "no '{expected}' in:\n{stderr}");
+    let expected = "material 'Neon': alpha does not cut its emission";
     assert!(stderr.contains(expected), "no '{expected}' in:\n{stderr}");
     // The decal's vertex alpha is rendered, so nothing is said of it.
     assert!(!stderr.contains("Sticker") && !stderr.contains("Decal"), "{stderr}");

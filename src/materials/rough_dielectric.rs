@@ -84,18 +84,17 @@ impl RoughDielectric {
         if wo.z <= 0.0 || wi.z == 0.0 {
             return 0.0;
         }
-        let visible = |h: Vec3| masking(self.alpha, wo) * distribution(self.alpha, h) * wo.dot(h) / wo.z;
         if wi.z > 0.0 {
-            let h = (wo + wi).normalize();
-            let reflected = fresnel_dielectric(wo.dot(h), eta);
-            return visible(h) / (4.0 * wo.dot(h)) * reflected;
+            let reflected = fresnel_dielectric(wo.dot((wo + wi).normalize()), eta);
+            return microfacet::reflection_pdf(self.alpha, wo, wi) * reflected;
         }
         let Some(h) = refracting_normal(eta, wo, wi) else {
             return 0.0;
         };
         let (cos_o, cos_i) = (wo.dot(h), wi.dot(h));
+        let visible = masking(self.alpha, wo) * distribution(self.alpha, h) * cos_o / wo.z;
         let jacobian = cos_i.abs() / (cos_i + cos_o / eta).powi(2);
-        visible(h) * jacobian * (1.0 - fresnel_dielectric(cos_o, eta))
+        visible * jacobian * (1.0 - fresnel_dielectric(cos_o, eta))
     }
 
     /// Samples a visible microfacet normal with `u`, then reflection through it with its Fresnel
