@@ -126,6 +126,29 @@ fn textured_seed() -> Value {
     doc
 }
 
+/// A scene with every volume input Caustic reads: `KHR_materials_volume` on a rough glass box
+/// with a point light inside it, on water overlapping it with a `caustic` priority and the camera
+/// inside, and on a thin pane with a thickness.
+fn volume_seed() -> Value {
+    let mut gltf = common::GltfBuilder::default();
+    let volume = |colour: [f32; 3], roughness: f32, thickness: f32, priority: i32| {
+        json!({"pbrMetallicRoughness": {"baseColorFactor": [0.9, 0.95, 1.0, 1.0], "roughnessFactor": roughness},
+            "extensions": {"KHR_materials_transmission": {"transmissionFactor": 1.0},
+                "KHR_materials_volume": {"attenuationColor": colour, "attenuationDistance": 0.5,
+                    "thicknessFactor": thickness}},
+            "extras": {"caustic": {"priority": priority}}})
+    };
+    let glass = gltf.material(volume([0.2, 0.8, 0.3], 0.3, 1.0, 1));
+    gltf.mesh("Glass", &common::box_triangles([-0.5, 0.0, -0.5], [0.5, 1.0, 0.5]), glass);
+    let water = gltf.material(volume([0.6, 0.8, 0.9], 0.0, 1.0, 0));
+    gltf.mesh("Water", &common::box_triangles([-1.0, -0.5, -1.0], [1.0, 0.5, 1.0]), water);
+    let pane = gltf.material(volume([0.9, 0.5, 0.2], 0.0, 0.05, 0));
+    gltf.mesh("Pane", &[[[-1.0, 2.0, -1.0], [-1.0, 2.0, 1.0], [1.0, 2.0, 1.0]]], pane);
+    gltf.light(json!({"type": "point", "intensity": 100.0}), [0.0, 0.7, 0.0], [0.0, -1.0, 0.0]);
+    gltf.camera([0.0, 0.2, 0.9], [0.0, 0.0, -1.0], 0.8);
+    gltf.to_json()
+}
+
 /// A value to put in place of any JSON value.
 fn hostile_value(rng: &mut impl Rng) -> Value {
     let values = [
@@ -200,9 +223,11 @@ proptest! {
     #[test]
     fn real_json_with_hostile_values_never_panics(seed in any::<u64>()) {
         let mut rng = rand_pcg::Pcg64::seed_from_u64(seed);
-        let name = ["furnace.gltf", "cornell_animated.gltf", "prism.gltf", "spot_glass.gltf", "textured"][rng.random_range(0..5)];
+        let name = ["furnace.gltf", "cornell_animated.gltf", "prism.gltf", "spot_glass.gltf", "textured", "volumes"]
+            [rng.random_range(0..6)];
         let mut doc: Value = match name {
             "textured" => textured_seed(),
+            "volumes" => volume_seed(),
             _ => serde_json::from_slice(&std::fs::read(scenes().join(name)).unwrap()).unwrap(),
         };
         for _ in 0..rng.random_range(1..4) {
@@ -212,15 +237,22 @@ proptest! {
     }
 }
 
-/// The textured seed itself loads and renders (so its mutations explore past the loader).
+/// The textured and volume seeds themselves load and render (so their mutations explore past the
+/// loader), with no warning but the pane's (glass on an open mesh).
 #[test]
-fn the_textured_seed_renders() {
+fn the_built_seeds_render() {
     let dir = tempfile::tempdir().unwrap();
-    let path = dir.path().join("textured.gltf");
-    std::fs::write(&path, textured_seed().to_string()).unwrap();
-    let description = Description::load(&path).unwrap();
-    assert!(description.warnings.is_empty(), "{:?}", description.warnings);
-    load_and_render(&path).unwrap();
+    for (name, seed, expected) in [("textured", textured_seed(), 0), ("volumes", volume_seed(), 1)] {
+        let path = dir.path().join(format!("{name}.gltf"));
+        std::fs::write(&path, seed.to_string()).unwrap();
+        let description = Description::load(&path).unwrap();
+        let warnings = &description.warnings;
+        assert!(
+            warnings.len() == expected && warnings.iter().all(|w| w.contains("'Pane'")),
+            "{name}: {warnings:?}"
+        );
+        load_and_render(&path).unwrap();
+    }
 }
 
 /// Inputs that crashed the loader once (tests/fuzz/*.gltf, *.glb) load or are refused cleanly.

@@ -313,6 +313,29 @@ fn a_layer_texture_that_is_not_there_is_refused() {
     assert_refused(&path, &["KHR_materials_sheen.sheenColorTexture", "texture 4", "does not have"]);
 }
 
+/// A volume whose values mean nothing (an attenuation distance of 0 or below, a negative
+/// thickness, a colour outside [0, 1] or not three numbers) is refused with a message naming the
+/// material and the field.
+#[test]
+fn impossible_volumes_are_refused() {
+    let dir = tempfile::tempdir().unwrap();
+    let cases = [
+        (json!({"attenuationDistance": 0.0, "attenuationColor": [0.5, 0.5, 0.5]}), "attenuationDistance"),
+        (json!({"attenuationDistance": -2.0}), "attenuationDistance"),
+        (json!({"attenuationDistance": "far"}), "attenuationDistance"),
+        (json!({"thicknessFactor": -0.1}), "thicknessFactor"),
+        (json!({"attenuationColor": [0.5, 1.5, 0.5], "attenuationDistance": 1.0}), "attenuationColor"),
+        (json!({"attenuationColor": [0.5, 0.5], "attenuationDistance": 1.0}), "attenuationColor"),
+    ];
+    for (i, (volume, field)) in cases.into_iter().enumerate() {
+        let path = furnace_edited(dir.path(), &format!("volume{i}.gltf"), |doc| {
+            doc["materials"][0]["extensions"] = json!({"KHR_materials_transmission": {"transmissionFactor": 1.0},
+                "KHR_materials_volume": volume});
+        });
+        assert_refused(&path, &["material '", &format!("KHR_materials_volume.{field}")]);
+    }
+}
+
 /// Hostile texture references and attributes render with a warning naming the material or mesh:
 /// a texture on a texture coordinate set Caustic does not carry, and tangents that are not
 /// finite numbers.

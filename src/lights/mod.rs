@@ -217,6 +217,16 @@ fn disc_origin(sphere: &BoundingSphere, direction: Vec3, u: Vec2) -> Vec3 {
 }
 
 impl Light {
+    /// Where it is, for finding the volumes its photons start in: a point light's position, a
+    /// triangle's centroid; `None` for lights at infinity.
+    pub fn centre(&self) -> Option<Vec3> {
+        match self {
+            Light::Point { position, .. } | Light::Spot { position, .. } => Some(*position),
+            Light::Triangle(t) => Some((t.corners[0] + t.corners[1] + t.corners[2]) / 3.0),
+            Light::Sun { .. } | Light::World(_) => None,
+        }
+    }
+
     /// Total emitted luminous power, for choosing lights in proportion to it.
     pub fn power(&self) -> f64 {
         let power = match self {

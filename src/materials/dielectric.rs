@@ -6,6 +6,7 @@
 
 use glam::{Vec3, Vec4};
 
+use super::volume::transmittance;
 use super::{face_toward, microfacet::reflect, BsdfSample, ShadingFrame, Transport};
 use crate::spectrum::SampledSpectrum;
 
@@ -66,21 +67,38 @@ pub fn sample(
     Some(BsdfSample { wi, weight: tint * weight, pdf: 0.0, is_delta: true })
 }
 
-/// Reflects or transmits `wo` at a thin dielectric wall of index `ior`: the light reflected by its
-/// two faces, inner reflections included, is `R + T^2 R / (1 - R^2)` of it (pbrt-v4's
-/// ThinDielectricBxDF); the rest passes straight through, unbent and unscaled (the wall's two
-/// refractions cancel), times `tint`.
+/// Reflects or transmits `wo` at a thin dielectric wall of index `ior` whose inside absorbs
+/// `depth` (absorption coefficient times thickness; zero for a clear wall) along its normal: of
+/// the light, `R + T^2 R a^2 / (1 - R^2 a^2)` is reflected by the two faces, inner reflections
+/// included, and `T^2 a / (1 - R^2 a^2)` passes straight through, unbent (the wall's two
+/// refractions cancel), times `tint`, where `a` is what one crossing of the wall at the refracted
+/// angle keeps (pbrt-v4's ThinDielectricBxDF, with absorption). Reflection is chosen with its
+/// share of what is not absorbed, so a clear wall's weights are 1.
 pub fn sample_thin(
     ior: f32,
     tint: SampledSpectrum,
+    depth: SampledSpectrum,
     frame: ShadingFrame,
     wo: Vec3,
     u: f32,
 ) -> Option<BsdfSample> {
     let n = face_toward(frame.n(), wo);
-    let r = fresnel_dielectric(n.dot(wo).min(1.0), ior);
-    let reflected = if r < 1.0 { r + (1.0 - r) * (1.0 - r) * r / (1.0 - r * r) } else { 1.0 };
-    let (wi, weight) = if u < reflected { (reflect(wo, n), Vec4::ONE) } else { (-wo, tint) };
+    let cos_i = n.dot(wo).min(1.0);
+    let r = fresnel_dielectric(cos_i, ior);
+    if r >= 1.0 {
+        return Some(BsdfSample { wi: reflect(wo, n), weight: Vec4::ONE, pdf: 0.0, is_delta: true });
+    }
+    let cos_t = (1.0 - (1.0 - cos_i * cos_i) / (ior * ior)).max(0.0).sqrt();
+    let a = transmittance(depth, 1.0 / cos_t);
+    let inner = Vec4::ONE / (Vec4::ONE - r * r * a * a);
+    let reflected = r + (1.0 - r) * (1.0 - r) * r * a * a * inner;
+    let through = (1.0 - r) * (1.0 - r) * a * inner;
+    let p_reflect = reflected.element_sum() / (reflected + through).element_sum();
+    let (wi, weight) = if u < p_reflect {
+        (reflect(wo, n), reflected / p_reflect)
+    } else {
+        (-wo, through * tint / (1.0 - p_reflect))
+    };
     Some(BsdfSample { wi, weight, pdf: 0.0, is_delta: true })
 }
 
@@ -99,14 +117,15 @@ mod tests {
     fn a_thin_wall_transmits_unbent_and_reflects_both_faces() {
         let wo = Vec3::new(0.6, 0.0, 0.8);
         let frame = ShadingFrame::new(Vec3::Z, Vec3::Z);
-        let through = sample_thin(1.5, Vec4::ONE, frame, wo, 0.999).unwrap();
+        let through = sample_thin(1.5, Vec4::ONE, Vec4::ZERO, frame, wo, 0.999).unwrap();
         assert!((through.wi + wo).length() < 1e-6, "{:?}", through.wi);
-        let back = sample_thin(1.5, Vec4::ONE, frame, wo, 0.0).unwrap();
+        let back = sample_thin(1.5, Vec4::ONE, Vec4::ZERO, frame, wo, 0.0).unwrap();
         assert!((back.wi - Vec3::new(-0.6, 0.0, 0.8)).length() < 1e-6);
         // At normal incidence a 1.5 wall reflects 2R / (1 + R) with R = 0.04.
         let reflected = (0..10_000)
             .filter(|&i| {
-                sample_thin(1.5, Vec4::ONE, frame, Vec3::Z, (i as f32 + 0.5) / 1e4).unwrap().wi.z > 0.0
+                sample_thin(1.5, Vec4::ONE, Vec4::ZERO, frame, Vec3::Z, (i as f32 + 0.5) / 1e4).unwrap().wi.z
+                    > 0.0
             })
             .count();
         assert!((reflected as f32 / 1e4 - 0.08 / 1.04).abs() < 2e-4, "{reflected}");

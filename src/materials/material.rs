@@ -17,6 +17,7 @@ use super::layering::{self, Choice, Over};
 use super::normal_map::NormalMap;
 use super::plastic::{self, Coat, Plastic};
 use super::sheen::Sheen;
+use super::volume::Volume;
 use super::{Bsdf, ShadingFrame, NARROW_COAT_ALPHA};
 use crate::spectrum::{Dispersion, RgbSpectrum, SampledSpectrum, Wavelengths};
 use crate::texture::{DataTexture, Texture};
@@ -72,6 +73,8 @@ pub struct Material {
     pub clearcoat: Option<Clearcoat>,
     /// A sheen over everything (`KHR_materials_sheen`).
     pub sheen: Option<Sheen>,
+    /// What absorbs inside, where light is transmitted (`KHR_materials_volume`).
+    pub volume: Option<Volume>,
 }
 
 /// What a path meets at a surface point: a BSDF in its frame, and the factor on the path's
@@ -215,6 +218,7 @@ impl Material {
             alpha: Alpha::Opaque,
             clearcoat: None,
             sheen: None,
+            volume: None,
         }
     }
 
@@ -397,7 +401,7 @@ impl Material {
         let (metallic, roughness) = self.metallic_roughness(inputs);
         let alpha = if roughness < SMOOTH_ROUGHNESS { 0.0 } else { roughness * roughness };
         if u_lobe < self.transmission {
-            return (transmission_bsdf(self.ior.index(lambda.hero()), alpha, self.thin, reflectance), 1.0);
+            return (self.transmission_bsdf(self.ior.index(lambda.hero()), alpha, reflectance, lambda), 1.0);
         }
         let u_lobe = (u_lobe - self.transmission) / (1.0 - self.transmission);
         if u_lobe < metallic {
@@ -420,17 +424,21 @@ impl Material {
         }
         (plastic.bsdf(), 1.0)
     }
-}
 
-/// The transmissive lobe of index `ior` and GGX `alpha` for a material of base colour `base`: a
-/// thin wall (smooth whatever its roughness) tints what passes by the base colour, a closed
-/// mesh's boundary by its square root, so that light through both boundaries is tinted by the
-/// base colour (Cycles' Principled BSDF).
-fn transmission_bsdf(ior: f32, alpha: f32, thin: bool, base: SampledSpectrum) -> Bsdf {
-    let tint = base.max(Vec4::ZERO);
-    match (thin, alpha) {
-        (true, _) => Bsdf::ThinDielectric { ior, tint },
-        (false, 0.0) => Bsdf::Dielectric { ior, tint: tint.sqrt() },
-        (false, _) => Bsdf::RoughDielectric { ior, alpha, tint: tint.sqrt() },
+    /// The transmissive lobe of index `ior` and GGX `alpha` for base colour `base` at `lambda`: a
+    /// thin wall (smooth whatever its roughness) tints what passes by the base colour and absorbs
+    /// across its volume's thickness, a closed mesh's boundary tints by the base colour's square
+    /// root, so that light through both boundaries is tinted by the base colour (Cycles'
+    /// Principled BSDF); what the closed mesh's volume absorbs, the path's segments inside take.
+    fn transmission_bsdf(&self, ior: f32, alpha: f32, base: SampledSpectrum, lambda: &Wavelengths) -> Bsdf {
+        let tint = base.max(Vec4::ZERO);
+        match (self.thin, alpha) {
+            (true, _) => {
+                let depth = self.volume.as_ref().map_or(Vec4::ZERO, |v| v.absorption(lambda) * v.thickness);
+                Bsdf::ThinDielectric { ior, tint, depth }
+            }
+            (false, 0.0) => Bsdf::Dielectric { ior, tint: tint.sqrt() },
+            (false, _) => Bsdf::RoughDielectric { ior, alpha, tint: tint.sqrt() },
+        }
     }
 }

@@ -6,7 +6,7 @@
 //! closed [`Bsdf`] with a value per wavelength (directions and indices follow the hero
 //! wavelength). One lobe or layer per file: `diffuse.rs`, `conductor.rs`, `dielectric.rs`,
 //! `plastic.rs` (the specular layer over the base, with `layer_albedo.rs`), `rough_dielectric.rs`,
-//! over the GGX distribution in `microfacet.rs`; `normal_map.rs` bends the shading normal and shadows the bend.
+//! over the GGX distribution in `microfacet.rs`; `volume.rs` absorbs inside transmissive materials; `normal_map.rs` bends the shading normal and shadows the bend.
 //!
 //! Directions are world-space unit vectors; `wo` and `wi` both point away from the surface.
 
@@ -23,6 +23,7 @@ mod normal_map;
 mod plastic;
 mod rough_dielectric;
 mod sheen;
+mod volume;
 
 use glam::{Vec2, Vec3, Vec3A, Vec4};
 
@@ -37,6 +38,7 @@ pub use normal_map::NormalMap;
 pub use plastic::{Coat, Plastic};
 pub use rough_dielectric::RoughDielectric;
 pub use sheen::Sheen;
+pub use volume::{transmittance, Volume};
 
 /// Specular layers narrower than this GGX alpha (roughness 0.316) are not gathered at: eye paths
 /// take direct light there and sample on through the layer's own reflection, as through a mirror,
@@ -110,6 +112,9 @@ pub enum Bsdf {
         ior: f32,
         /// What passing through the wall transmits at each wavelength (the base colour).
         tint: SampledSpectrum,
+        /// What its inside absorbs across it: the absorption coefficient times the thickness, at
+        /// each wavelength (zero for a clear wall).
+        depth: SampledSpectrum,
     },
     /// A sheen's fibres (Zeltner et al.'s microfiber sheen, as Cycles renders it).
     Sheen {
@@ -249,7 +254,9 @@ impl Bsdf {
             Bsdf::RoughDielectric { ior, alpha, tint } => {
                 RoughDielectric { ior, alpha, tint }.sample(frame, wo, u, u_lobe, mode)
             }
-            Bsdf::ThinDielectric { ior, tint } => dielectric::sample_thin(ior, tint, frame, wo, u_lobe),
+            Bsdf::ThinDielectric { ior, tint, depth } => {
+                dielectric::sample_thin(ior, tint, depth, frame, wo, u_lobe)
+            }
             Bsdf::Sheen { colour, roughness } => sheen::sample(colour, roughness, n, wo, u),
             Bsdf::Black => None,
             Bsdf::PassThrough => Some(BsdfSample { wi: -wo, weight: Vec4::ONE, pdf: 0.0, is_delta: true }),
@@ -825,7 +832,7 @@ mod tests {
         let pane = Material { thin: true, ..frosted };
         assert_eq!(
             pane.lobe(&SurfaceInputs::default(), FRAME, Vec3::Z, &at(550.0), 0.5).bsdf,
-            Bsdf::ThinDielectric { ior: 1.5, tint: Vec4::splat(0.8) }
+            Bsdf::ThinDielectric { ior: 1.5, tint: Vec4::splat(0.8), depth: Vec4::ZERO }
         );
         assert!(!glass.is_dispersive());
         let flint = Material { ior: Dispersion::glass("SF11").unwrap(), ..glass };

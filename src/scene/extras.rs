@@ -115,6 +115,9 @@ pub struct MaterialExtras {
     pub ior_table: Option<Vec<[f32; 2]>>,
     /// Abbe number V_d, with the material's IOR as n_d (the `KHR_materials_dispersion` law).
     pub abbe: Option<f32>,
+    /// Where its volume overlaps another's (water meeting its glass), the volume of highest
+    /// priority fills the overlap (0 when not given).
+    pub priority: Option<i32>,
 }
 
 /// Sellmeier coefficients: `n^2 = 1 + sum b_k l^2 / (l^2 - c_k)`, l in micrometres.

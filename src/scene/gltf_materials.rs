@@ -10,7 +10,9 @@ use super::extras::{self, MaterialExtras};
 use super::gltf_textures::{decode, info_map, normal_map, raw_info};
 use gltf::material::AlphaMode;
 
-use crate::materials::{Alpha, BaseColour, Clearcoat, Coverage, Material, NormalMap, Sheen, Specular};
+use crate::materials::{
+    Alpha, BaseColour, Clearcoat, Coverage, Material, NormalMap, Sheen, Specular, Volume,
+};
 use crate::spectrum::{Dispersion, RgbSpectrum};
 use crate::texture::{DataTexture, Rgba, Texture, TextureMap};
 
@@ -64,7 +66,13 @@ pub fn material(
     let specular = specular(m, &image)?;
     let clearcoat = clearcoat(m, document, images).map_err(in_material)?;
     let sheen = sheen(m, document, images).map_err(in_material)?;
+    let extras: MaterialExtras =
+        extras::parse(m.extras()).map_err(|e| in_material(format!("extras `caustic`: {e}")))?;
+    let volume = volume(m, extras.priority.unwrap_or(0)).map_err(in_material)?;
+    let ior = dispersion_law(m, &extras).map_err(in_material)?;
     Ok(Material {
+        ior,
+        volume,
         clearcoat,
         sheen,
         specular,
@@ -76,7 +84,6 @@ pub fn material(
         metallic: pbr.metallic_factor().clamp(0.0, 1.0),
         roughness: pbr.roughness_factor().clamp(0.0, 1.0),
         transmission: m.transmission().map_or(0.0, |t| t.transmission_factor()).clamp(0.0, 1.0),
-        ior: dispersion_law(m).map_err(|e| format!("material '{}': {e}", m.name().unwrap_or("unnamed")))?,
         emission_texture,
         emission: (emission.max_element() > 0.0).then(|| RgbSpectrum::illuminant(emission)),
         emits_both_sides: true,
@@ -193,11 +200,50 @@ fn sheen(
     }))
 }
 
+/// `KHR_materials_volume` (read raw, so that values the gltf crate lets through are refused here
+/// by name) with the volume's `priority`, or `None` where nothing is absorbed: without the
+/// extension, without an attenuation distance (glTF's default: infinite), with a white colour,
+/// or with a thickness factor of 0, which glTF reads as a thin wall without a volume (warned of
+/// by `gltf_unrendered`).
+fn volume(m: &gltf::Material, priority: i32) -> Result<Option<Volume>, String> {
+    const EXTENSION: &str = "KHR_materials_volume";
+    let Some(value) = m.extension_value(EXTENSION) else {
+        return Ok(None);
+    };
+    let number = |key: &str| match &value[key] {
+        serde_json::Value::Null => Ok(None),
+        v => v.as_f64().map(Some).ok_or_else(|| format!("{EXTENSION}.{key}: expected a number, got {v}")),
+    };
+    let thickness = number("thicknessFactor")?.unwrap_or(0.0);
+    if !(thickness >= 0.0) {
+        return Err(format!("{EXTENSION}.thicknessFactor: expected 0 or more, got {thickness}"));
+    }
+    let distance = number("attenuationDistance")?;
+    if let Some(d) = distance.filter(|&d| !(d > 0.0)) {
+        return Err(format!("{EXTENSION}.attenuationDistance: expected a positive distance, got {d}"));
+    }
+    let colour = match &value["attenuationColor"] {
+        serde_json::Value::Null => Vec3::ONE,
+        v => unit_colour(v).ok_or_else(|| {
+            format!("{EXTENSION}.attenuationColor: expected three numbers in [0, 1], got {v}")
+        })?,
+    };
+    let distance = distance.map_or(f32::INFINITY, |d| d as f32);
+    let absorbs = distance.is_finite() && colour != Vec3::ONE && thickness > 0.0;
+    Ok(absorbs.then(|| Volume::new(colour, distance, thickness as f32, priority)))
+}
+
+/// A JSON array of three numbers in [0, 1], as a colour.
+fn unit_colour(value: &serde_json::Value) -> Option<Vec3> {
+    let array = value.as_array().filter(|a| a.len() == 3)?;
+    let channel = |i: usize| array[i].as_f64().filter(|c| (0.0..=1.0).contains(c)).map(|c| c as f32);
+    Some(Vec3::new(channel(0)?, channel(1)?, channel(2)?))
+}
+
 /// The material's index against wavelength: the `caustic` extras first, then
 /// `KHR_materials_dispersion` (read raw: the gltf crate does not type it), then a constant.
-fn dispersion_law(m: &gltf::Material) -> Result<Dispersion, String> {
+fn dispersion_law(m: &gltf::Material, extras: &MaterialExtras) -> Result<Dispersion, String> {
     let n_d = m.ior().unwrap_or(1.5);
-    let extras: MaterialExtras = extras::parse(m.extras()).map_err(|e| format!("extras `caustic`: {e}"))?;
     if let Some(name) = &extras.glass {
         return Dispersion::glass(name).ok_or_else(|| {
             format!(

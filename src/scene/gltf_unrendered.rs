@@ -16,6 +16,7 @@ const RENDERED_MATERIAL_EXTENSIONS: &[&str] = &[
     "KHR_materials_sheen",
     "KHR_materials_specular",
     "KHR_materials_transmission",
+    "KHR_materials_volume",
 ];
 
 /// One line for each thing in material `m` that is not rendered.
@@ -29,11 +30,37 @@ pub fn material_warnings(m: &gltf::Material) -> Vec<String> {
         .map(|k| format!("{k} is not rendered"))
         .collect();
     unrendered.extend(unrendered_textures(m));
+    unrendered.extend(unrendered_volume(m));
     let emits = m.emissive_factor().iter().any(|&c| c > 0.0) || m.emissive_texture().is_some();
     if emits && m.alpha_mode() != gltf::material::AlphaMode::Opaque {
         unrendered.push("alpha does not cut its emission (it glows at full strength where cut away)".into());
     }
     unrendered.into_iter().map(|what| format!("material '{name}': {what}")).collect()
+}
+
+/// What of `m`'s `KHR_materials_volume` is not rendered: absorption where glTF says there is no
+/// volume (a thickness factor of 0: a thin wall) or where light never enters (no transmission),
+/// and the thickness texture (the geometry gives the path length).
+fn unrendered_volume(m: &gltf::Material) -> Vec<String> {
+    let Some(volume) = m.extension_value("KHR_materials_volume") else {
+        return Vec::new();
+    };
+    let absorbs = volume["attenuationDistance"].is_number()
+        && volume["attenuationColor"].as_array().is_some_and(|c| c.iter().any(|v| v.as_f64() != Some(1.0)));
+    let thickness = volume["thicknessFactor"].as_f64().unwrap_or(0.0);
+    let transmits = m.transmission().is_some_and(|t| t.transmission_factor() > 0.0);
+    let mut unrendered = Vec::new();
+    if absorbs && thickness <= 0.0 {
+        unrendered.push(
+            "KHR_materials_volume's attenuation is not rendered: its thicknessFactor of 0 makes it a thin wall without a volume (glTF's reading)".to_string(),
+        );
+    } else if absorbs && !transmits {
+        unrendered.push("KHR_materials_volume's attenuation is not rendered: light does not enter a material without transmission".into());
+    }
+    if volume.get("thicknessTexture").is_some() {
+        unrendered.push("KHR_materials_volume's thicknessTexture is not read (a closed mesh's geometry gives the path length, a thin wall's thicknessFactor)".into());
+    }
+    unrendered
 }
 
 /// The textures of `m` that are not read: those on a texture coordinate set Caustic does not

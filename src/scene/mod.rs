@@ -188,6 +188,15 @@ impl Scene {
         }
     }
 
+    /// The index in `materials` of `triangle`'s material.
+    pub fn triangle_material(&self, triangle: u32) -> u32 {
+        let fixed = self.fixed.triangles.len();
+        match (triangle as usize).checked_sub(fixed) {
+            None => self.fixed.triangles[triangle as usize].material,
+            Some(moving) => self.moving.triangles[moving].material,
+        }
+    }
+
     /// The index in `lights` of `triangle`'s emitter, or [`NOT_A_LIGHT`].
     pub fn triangle_light(&self, triangle: u32) -> u32 {
         let fixed = self.fixed.triangles.len();

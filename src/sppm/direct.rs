@@ -4,6 +4,7 @@
 
 use glam::Vec3;
 
+use super::media::Media;
 use super::renderer::{PassStats, Renderer, VisiblePoint};
 use super::see_through;
 use crate::geometry::offset_origin;
@@ -33,6 +34,10 @@ pub struct DirectLight<'a> {
     pub wavelengths: &'a Wavelengths,
     /// Where the light arrives.
     pub point: &'a VisiblePoint,
+    /// The volumes the path that reached the point is in.
+    pub media: Media,
+    /// The point's material.
+    pub material: u32,
 }
 
 /// A ray that must reach its end for a direct-light term to count.
@@ -62,6 +67,17 @@ impl DirectTerm {
 }
 
 impl DirectLight<'_> {
+    /// What the volume a ray leaving the point toward `wi` runs through keeps of light over
+    /// `length` (all of it outside volumes).
+    fn kept(&self, wi: Vec3, length: f32) -> SampledSpectrum {
+        if !self.renderer.has_volumes {
+            return SampledSpectrum::ONE;
+        }
+        let (scene, point) = (self.renderer.scene, self.point);
+        let media = self.media.crossed(scene, self.material, point.frame.ng(), point.wo, wi);
+        media.transmittance(scene, self.wavelengths, length).unwrap_or(SampledSpectrum::ONE)
+    }
+
     /// One light-sampled and one BSDF-sampled term, to be combined by MIS (their sum).
     pub fn estimate(&self, rng: &mut PixelSampler, stats: &mut PassStats) -> [DirectTerm; 2] {
         [self.light_sampled(rng, stats), self.bsdf_sampled(rng, stats)]
@@ -100,6 +116,7 @@ impl DirectLight<'_> {
         if through <= 0.0 {
             return DirectTerm::ZERO;
         }
+        let through = self.kept(sample.wi, sample.distance) * through;
         let weight = if sample.pdf > 0.0 {
             power_heuristic(p_choice * sample.pdf, point.bsdf.pdf(point.frame, point.wo, sample.wi))
         } else {
@@ -133,13 +150,13 @@ impl DirectLight<'_> {
         } else {
             (renderer.accel.intersect(origin, sample.wi, f32::INFINITY), 1.0)
         };
-        let sample = BsdfSample { weight: sample.weight * through, ..sample };
         // From the origin to the surface hit, across any cut-away surfaces before it.
         let t_max = match hit {
             Some(h) if renderer.has_cut_away_surfaces => (h.p - origin).dot(sample.wi).max(h.t),
             Some(h) => h.t,
             None => f32::INFINITY,
         };
+        let sample = BsdfSample { weight: sample.weight * through * self.kept(sample.wi, t_max), ..sample };
         let ray = Some(ShadowRay { origin, direction: sample.wi, t_max });
         let Some(hit) = hit else {
             let value = scene

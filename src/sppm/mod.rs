@@ -7,6 +7,7 @@
 mod direct;
 mod gather;
 mod grid;
+mod media;
 mod pass;
 mod photons;
 pub mod radius;

@@ -10,6 +10,7 @@ use glam::{Vec3, Vec3A};
 
 use rayon::prelude::*;
 
+use super::media::Media;
 use super::renderer::{PassSamples, PassStats, Renderer, MAX_DEPTH};
 use crate::geometry::offset_origin;
 use crate::materials::{Bsdf, Transport};
@@ -43,6 +44,8 @@ pub struct PhotonState {
     pub flux: SampledSpectrum,
     /// The path carries its hero wavelength alone.
     pub hero_only: bool,
+    /// The volumes it is in.
+    pub media: Media,
     /// Segments traced before this one.
     pub depth: u32,
     /// It has scattered off a surface (not only passed where alpha cuts one away): from here on
@@ -74,6 +77,7 @@ pub fn start_photon(renderer: &Renderer, pass: &PassSamples, k: u64) -> Option<(
         direction: emitted.direction.into(),
         flux,
         hero_only: false,
+        media: renderer.light_media(index),
         depth: 0,
         scattered: false,
         rng,
@@ -109,6 +113,9 @@ pub fn continue_photon(
         let Some(hit) = hit else {
             break;
         };
+        // What the volume it crossed absorbed joins the roulette's weight below, so that photons
+        // in a dark volume end rather than carry ever less flux.
+        let kept = state.media.transmittance(scene, &pass.wavelengths, hit.t).unwrap_or(SampledSpectrum::ONE);
         let surface = scene.surface(&hit, &pass.wavelengths);
         let material = &scene.materials[surface.material as usize];
         let wo = -Vec3::from(state.direction);
@@ -118,7 +125,13 @@ pub fn continue_photon(
         let lands = bsdf.is_gathered_at() || (*bsdf != Bsdf::PassThrough && material.gathers_photons());
         if state.scattered && lands {
             let ng = if surface.frame.ng().dot(wo) < 0.0 { -surface.frame.ng() } else { surface.frame.ng() };
-            out.push(Photon { p: surface.p, wi: wo, ng, flux: state.flux, hero_only: state.hero_only });
+            out.push(Photon {
+                p: surface.p,
+                wi: wo,
+                ng,
+                flux: state.flux * kept,
+                hero_only: state.hero_only,
+            });
             stats.photons_stored += 1;
         }
         let u = rng.next_2d();
@@ -130,7 +143,7 @@ pub fn continue_photon(
         // survival probability keeps the flux of surviving photons nearly constant. The largest
         // wavelength's change instead traced 28% more photon segments a pass, for no less error
         // in equal time.
-        let weight = sample.weight * (lobe.weight * lobe.importance_correction(wo, sample.wi));
+        let weight = kept * sample.weight * (lobe.weight * lobe.importance_correction(wo, sample.wi));
         let survive = (weight.element_sum() / LANES as f32).min(1.0);
         if rng.next_1d() >= survive {
             break;
@@ -140,6 +153,9 @@ pub fn continue_photon(
             state.hero_only = true;
         }
         state.flux *= weight / survive;
+        if renderer.has_volumes && *bsdf != Bsdf::PassThrough {
+            state.media = state.media.crossed(scene, surface.material, surface.frame.ng(), wo, sample.wi);
+        }
         state.origin = offset_origin(surface.p, surface.frame.ng(), sample.wi, surface.scale).into();
         state.direction = sample.wi.into();
         state.depth += 1;

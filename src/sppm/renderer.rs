@@ -11,6 +11,7 @@ use crate::sampling::{pass_sample, Distribution1D};
 use crate::scene::Scene;
 use crate::spectrum::{SampledSpectrum, Wavelengths};
 
+use super::media::{media_at, Media};
 use super::radius;
 
 /// Longest path (bounces) an eye path follows through delta surfaces, and a photon overall.
@@ -210,30 +211,77 @@ pub struct Renderer<'a> {
     pub(super) settings: SppmSettings,
     /// Some material's alpha cuts its surface away somewhere: shadow rays look through.
     pub(super) has_cut_away_surfaces: bool,
+    /// Some material absorbs inside: paths keep the stack of volumes they are in.
+    pub(super) has_volumes: bool,
+    /// The volumes the camera and each light are in (none where the scene has no volumes).
+    start_media: StartMedia,
 }
 
-/// Whether some material's alpha can cut its surface away.
-fn has_cut_away_surfaces(scene: &Scene) -> bool {
-    scene.materials.iter().any(|m| m.alpha.cuts())
+/// The volumes paths start in.
+#[derive(Default)]
+struct StartMedia {
+    /// The camera's (at its lens centre).
+    camera: Media,
+    /// Each light's (at its centre), by index; empty when every light is outside all volumes.
+    lights: Vec<Media>,
+}
+
+impl StartMedia {
+    /// The volumes `renderer`'s camera and lights are in.
+    fn of(renderer: &Renderer) -> Self {
+        if !renderer.has_volumes {
+            return StartMedia::default();
+        }
+        let at = |p: Option<Vec3>| p.map_or(Media::NONE, |p| media_at(renderer, p));
+        let lights: Vec<Media> = renderer.scene.lights.iter().map(|l| at(l.centre())).collect();
+        let inside = lights.iter().any(|&m| m != Media::NONE);
+        StartMedia {
+            camera: at(Some(renderer.scene.camera.position)),
+            lights: if inside { lights } else { Vec::new() },
+        }
+    }
 }
 
 impl<'a> Renderer<'a> {
     /// A renderer for `scene`; lights are chosen in proportion to their power.
     pub fn new(scene: &'a Scene, accel: &'a Accel, settings: SppmSettings) -> Self {
         let light_choice = Distribution1D::new(scene.lights.iter().map(Light::power));
-        Renderer { scene, accel, light_choice, settings, has_cut_away_surfaces: has_cut_away_surfaces(scene) }
+        Renderer::with_light_choice(scene, accel, light_choice, settings)
+    }
+
+    fn with_light_choice(
+        scene: &'a Scene,
+        accel: &'a Accel,
+        light_choice: Distribution1D,
+        settings: SppmSettings,
+    ) -> Self {
+        let mut renderer = Renderer {
+            scene,
+            accel,
+            light_choice,
+            settings,
+            has_cut_away_surfaces: scene.materials.iter().any(|m| m.alpha.cuts()),
+            has_volumes: scene.materials.iter().any(|m| m.volume.is_some()),
+            start_media: StartMedia::default(),
+        };
+        renderer.start_media = StartMedia::of(&renderer);
+        renderer
     }
 
     /// A renderer for `scene` that chooses lights as `other` does (frames that share photon
     /// paths must choose their lights alike).
     pub fn choosing_lights_as(other: &Renderer, scene: &'a Scene, accel: &'a Accel) -> Self {
-        Renderer {
-            scene,
-            accel,
-            light_choice: other.light_choice.clone(),
-            settings: other.settings.clone(),
-            has_cut_away_surfaces: has_cut_away_surfaces(scene),
-        }
+        Renderer::with_light_choice(scene, accel, other.light_choice.clone(), other.settings.clone())
+    }
+
+    /// The volumes the camera is in.
+    pub(super) fn camera_media(&self) -> Media {
+        self.start_media.camera
+    }
+
+    /// The volumes light `index` is in.
+    pub(super) fn light_media(&self, index: usize) -> Media {
+        self.start_media.lights.get(index).copied().unwrap_or(Media::NONE)
     }
 
     /// The settings.

@@ -26,6 +26,7 @@
 use glam::{Vec2, Vec3, Vec3A};
 
 use super::direct::{DirectLight, DirectTerm, ShadowRay};
+use super::media::Media;
 use super::renderer::{PassSamples, PassStats, Renderer, VisiblePoint, MAX_DEPTH};
 use crate::geometry::offset_origin;
 use crate::materials::{Bsdf, Lobe, Transport};
@@ -53,6 +54,8 @@ pub struct EyeState {
     pub beta: SampledSpectrum,
     /// The path carries its hero wavelength alone (it passed a dispersive refraction).
     pub hero_only: bool,
+    /// The volumes it is in.
+    pub media: Media,
     /// Radiance found so far.
     pub radiance: SampledSpectrum,
     /// Segments traced before this one.
@@ -98,6 +101,7 @@ pub fn start_eye_path(renderer: &Renderer, pass: &PassSamples, pixel: usize) -> 
             direction: direction.into(),
             beta: SampledSpectrum::ONE,
             hero_only: false,
+            media: renderer.camera_media(),
             radiance: SampledSpectrum::ZERO,
             depth: 0,
             lights_sampled: false,
@@ -141,6 +145,11 @@ pub fn continue_eye_path(
         stats.eye_rays += 1;
         let hit = renderer.accel.intersect(state.origin.into(), state.direction.into(), f32::INFINITY);
         watch(EyeEvent::Segment(&state, hit.map_or(f32::INFINITY, |h| h.t)));
+        if let Some(kept) =
+            state.media.transmittance(scene, &pass.wavelengths, hit.map_or(f32::INFINITY, |h| h.t))
+        {
+            state.beta *= kept;
+        }
         let Some(hit) = hit else {
             if !state.lights_sampled {
                 state.radiance +=
@@ -164,9 +173,15 @@ pub fn continue_eye_path(
         state.beta *= weight;
         let vertex =
             VisiblePoint::new(surface.p, frame, wo, bsdf, state.beta, state.hero_only, surface.scale);
+        let direct_light = DirectLight {
+            renderer,
+            wavelengths: &pass.wavelengths,
+            point: &vertex,
+            media: state.media,
+            material: surface.material,
+        };
         if bsdf.is_gathered_at() {
-            direct = DirectLight { renderer, wavelengths: &pass.wavelengths, point: &vertex }
-                .estimate(rng, &mut stats);
+            direct = direct_light.estimate(rng, &mut stats);
             radiance_before = state.radiance;
             state.radiance = with_direct(radiance_before, state.beta, direct.map(|t| t.value));
             point = Some(vertex);
@@ -174,8 +189,7 @@ pub fn continue_eye_path(
         }
         state.lights_sampled = !bsdf.is_delta();
         if state.lights_sampled {
-            let terms = DirectLight { renderer, wavelengths: &pass.wavelengths, point: &vertex }
-                .estimate(rng, &mut stats);
+            let terms = direct_light.estimate(rng, &mut stats);
             terms.iter().filter_map(|t| t.ray).for_each(|ray| watch(EyeEvent::Shadow(ray)));
             state.radiance = with_direct(state.radiance, state.beta, terms.map(|t| t.value));
         }
@@ -189,6 +203,9 @@ pub fn continue_eye_path(
             state.hero_only = true;
         }
         state.beta *= sample.weight;
+        if renderer.has_volumes && bsdf != Bsdf::PassThrough {
+            state.media = state.media.crossed(scene, surface.material, surface.frame.ng(), wo, sample.wi);
+        }
         state.origin = offset_origin(surface.p, surface.frame.ng(), sample.wi, surface.scale).into();
         state.direction = sample.wi.into();
         state.depth += 1;
