@@ -1,7 +1,8 @@
 """The scene as glTF 2.0 through Blender's own exporter, plus what the exporter drops, written into
 the `caustic` extras (docs/extras.md) by the exporter's hooks while Caustic exports: area lights,
 the sun's angle, the camera's depth of field, the shutter, the frame rate, the resolution (with its
-percentage), the active camera, the world's colour and dispersion.
+percentage), the active camera, the world's colour and dispersion; and a glass's volume absorption
+as `KHR_materials_volume` (`volume_absorption`).
 
 The hooks change nothing in the user's data: they add extras to what is being written, and
 complete two values of the layers the exporter leaves out (`complete_layers`).
@@ -123,6 +124,51 @@ class glTF2ExportUserExtension:
         if _exporting:
             add_extras(gltf_material, material_extras(blender_material))
             complete_layers(gltf_material, blender_material)
+            add_volume(gltf_material, blender_material)
+
+
+def volume_node(material):
+    """The node that feeds the material's active output's volume, or None."""
+    output = output_node(material)
+    return output.inputs["Volume"].links[0].from_node if output and output.inputs["Volume"].links else None
+
+
+def volume_absorption(material):
+    """The absorption of the material's volume (a Volume Absorption node, or a Principled Volume's
+    absorption) as `KHR_materials_volume`'s attenuation colour and distance, or None where nothing
+    absorbs. Converted exactly: Cycles absorbs `k = (1 - Color) * Density` per unit of length (a
+    Principled Volume `(1 - Color)(1 - sqrt(Absorption Color)) * Density`, each factor at least 0),
+    and glTF keeps `attenuationColor ^ (length / attenuationDistance)`; so the distance is
+    `1 / Density` and each channel of the colour `exp(-k / Density)`. (Blender's glTF exporter
+    writes the Color itself as the attenuation colour, which absorbs differently.)"""
+    node = volume_node(material)
+    if node is None or node.type not in ('VOLUME_ABSORPTION', 'PRINCIPLED_VOLUME'):
+        return None
+    colour = [max(c, 0.0) for c in node.inputs["Color"].default_value[:3]]
+    density = node.inputs["Density"].default_value
+    per_density = [max(1.0 - c, 0.0) for c in colour]
+    if node.type == 'PRINCIPLED_VOLUME':
+        absorption = node.inputs["Absorption Color"].default_value[:3]
+        per_density = [k * max(1.0 - math.sqrt(max(a, 0.0)), 0.0) for k, a in zip(per_density, absorption)]
+    if density <= 0.0 or max(per_density) <= 0.0:
+        return None
+    return {"attenuationColor": [math.exp(-k) for k in per_density], "attenuationDistance": 1.0 / density}
+
+
+def add_volume(gltf_material, material):
+    """Writes the material's volume absorption as `KHR_materials_volume`, keeping the thickness
+    factor the exporter wrote (from a glTF Material Output node) or 1 (glTF reads 0 as no volume;
+    the factor matters only on open meshes, which render as thin walls of that thickness)."""
+    absorption = volume_absorption(material)
+    if absorption is None:
+        return
+    from io_scene_gltf2.io.com.gltf2_io_extensions import Extension
+    extensions = gltf_material.extensions or {}
+    written = extensions.get("KHR_materials_volume")
+    thickness = written.extension.get("thicknessFactor", 1.0) if written is not None else 1.0
+    extension = {**absorption, "thicknessFactor": thickness}
+    extensions["KHR_materials_volume"] = Extension("KHR_materials_volume", extension, required=False)
+    gltf_material.extensions = extensions
 
 
 def complete_layers(gltf_material, material):
@@ -151,11 +197,16 @@ SUPPORTED_INPUTS = {"Base Color", "Metallic", "Roughness", "IOR", "Transmission 
 IGNORED_INPUTS = {"Subsurface Weight": 0.0, "Anisotropic": 0.0, "Thin Film Thickness": 0.0}
 
 
-def surface_node(material):
-    """The node that feeds the material's active output's surface, or None."""
+def output_node(material):
+    """The material's active output node, or None."""
     if material is None or material.node_tree is None:
         return None
-    output = next((n for n in material.node_tree.nodes if n.type == 'OUTPUT_MATERIAL' and n.is_active_output), None)
+    return next((n for n in material.node_tree.nodes if n.type == 'OUTPUT_MATERIAL' and n.is_active_output), None)
+
+
+def surface_node(material):
+    """The node that feeds the material's active output's surface, or None."""
+    output = output_node(material)
     return output.inputs["Surface"].links[0].from_node if output and output.inputs["Surface"].links else None
 
 
@@ -165,15 +216,32 @@ def principled_node(material):
     return surface if surface is not None and surface.type == 'BSDF_PRINCIPLED' else None
 
 
+def volume_warnings(material):
+    """What of `material`'s volume Caustic does not render, as sentences."""
+    node = volume_node(material)
+    if node is None:
+        return []
+    name = f"material '{material.name}'"
+    if node.type not in ('VOLUME_ABSORPTION', 'PRINCIPLED_VOLUME'):
+        return [f"{name}: its volume ({node.name}) is not rendered (Volume Absorption and a Principled Volume's "
+                "absorption are)"]
+    warnings = [f"{name}: the volume's {socket.name} is linked; its unlinked value is rendered"
+                for socket in node.inputs if socket.name in ("Color", "Density", "Absorption Color") and socket.is_linked]
+    if node.type == 'PRINCIPLED_VOLUME' and node.inputs["Density"].default_value > 0 and \
+            max(node.inputs["Color"].default_value[:3]) > 0:
+        warnings.append(f"{name}: the Principled Volume's scattering is not rendered (its absorption is)")
+    return warnings
+
+
 def material_warnings(material):
     """What of `material` Caustic does not render, as sentences."""
     surface = surface_node(material)
     if surface is None:
-        return []
+        return volume_warnings(material)
     if surface.type != 'BSDF_PRINCIPLED':
         return [f"material '{material.name}': only the Principled BSDF is supported ({surface.name} is exported "
-                "as Blender's glTF exporter sees it)"]
-    warnings = []
+                "as Blender's glTF exporter sees it)"] + volume_warnings(material)
+    warnings = volume_warnings(material)
     for name, neutral in IGNORED_INPUTS.items():
         socket = surface.inputs.get(name)
         if socket is not None and (socket.is_linked or abs(socket.default_value - neutral) > 1e-6):

@@ -604,22 +604,21 @@ fn glass_tints_what_it_transmits_by_its_base_colour() {
 /// A white glass sphere in a white world of radiance 1 vanishes (radiance 1 within 2%), smooth
 /// or slightly frosted: what a rough boundary refracts toward the world, or reflects, is found by
 /// light samples through the boundary and by the paths on through it alike (without light
-/// samples through it, roughness 0.2 reads 0.04). At roughness 0.5 single scattering loses light
-/// between microfacets at both boundaries and at every inner reflection: the centre reads 0.91
-/// (Cycles' Multiscatter GGX gives that back; Caustic does not yet), never above 1.
+/// samples through it, roughness 0.2 reads 0.04). At roughness 0.5 and 1 single scattering
+/// loses light between microfacets at both boundaries and at every inner reflection (the centre
+/// read 0.91 at 0.5); the boundary's albedo scaling gives it back, as Cycles' Multiscatter GGX
+/// does, within 3% (camera paths are scaled for the direction they leave toward, which is exact
+/// for flux but not for radiance through each boundary).
 #[test]
 fn a_frosted_glass_sphere_vanishes_in_a_white_furnace() {
     let dir = tempfile::tempdir().unwrap();
-    for (roughness, tolerance) in [(0.0, 0.02), (0.2, 0.02), (0.5, 0.11)] {
+    for (roughness, tolerance) in [(0.0, 0.02), (0.2, 0.02), (0.5, 0.03), (1.0, 0.03)] {
         let material = json!({"pbrMetallicRoughness": {"baseColorFactor": [1.0, 1.0, 1.0, 1.0],
             "metallicFactor": 0.0, "roughnessFactor": roughness},
             "extensions": {"KHR_materials_transmission": {"transmissionFactor": 1.0}}});
         let image = sphere_in_a_white_world(dir.path(), material, 0.45, 32);
         for (c, value) in image.mean(10, 22, 10, 22).iter().enumerate() {
-            assert!(
-                value - 1.0 < 0.01 && 1.0 - value < tolerance,
-                "roughness {roughness}, channel {c}: {value}"
-            );
+            assert!((value - 1.0).abs() < tolerance, "roughness {roughness}, channel {c}: {value}");
         }
     }
 }

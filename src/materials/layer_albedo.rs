@@ -23,14 +23,14 @@ use super::microfacet::reflect;
 
 /// Table nodes over `sqrt(mu)`, `mu` the cosine of the viewing direction (denser toward grazing,
 /// where the albedo changes fastest).
-const MU_NODES: usize = 32;
+pub(super) const MU_NODES: usize = 32;
 /// Table nodes over perceptual roughness `sqrt(alpha)` in [0, 1].
-const ROUGHNESS_NODES: usize = 32;
+pub(super) const ROUGHNESS_NODES: usize = 32;
 /// Table nodes over `t = (eta - 1) / (eta + 1)` in [0, T_MAX] (eta from 1 to 4).
 const ETA_NODES: usize = 16;
 const T_MAX: f32 = 0.6;
 /// Strata per side of the sample grid of each entry.
-const STRATA: usize = 32;
+pub(super) const STRATA: usize = 32;
 
 /// The albedo tables: `E1[roughness][mu]`, `Es[t][roughness][mu]`, and their cosine-weighted
 /// hemispherical means.
@@ -84,12 +84,12 @@ impl Tables {
     }
 }
 
-fn mu_at(m: usize) -> f32 {
+pub(super) fn mu_at(m: usize) -> f32 {
     // The grazing node sits just above zero, where the albedo is still defined.
     (m as f32 / (MU_NODES - 1) as f32).powi(2).max(1e-4)
 }
 
-fn alpha_at(r: usize) -> f32 {
+pub(super) fn alpha_at(r: usize) -> f32 {
     let roughness = (r as f32 / (ROUGHNESS_NODES - 1) as f32).max(0.02);
     roughness * roughness
 }
@@ -129,7 +129,7 @@ fn hemispherical_mean(e: &[f32]) -> f32 {
 }
 
 /// Linear interpolation weights for `x` in [0, 1] over `nodes` evenly spaced nodes.
-fn lerp_index(x: f32, nodes: usize) -> (usize, f32) {
+pub(super) fn lerp_index(x: f32, nodes: usize) -> (usize, f32) {
     let f = x.clamp(0.0, 1.0) * (nodes - 1) as f32;
     let i = (f as usize).min(nodes - 2);
     (i, f - i as f32)
@@ -181,7 +181,7 @@ pub fn white_ggx_albedo(alpha: f32, mu: f32) -> (f32, f32) {
 }
 
 /// `value` interpolated linearly between node `i` and `i + 1` with weight `f` on the second.
-fn blend((i, f): (usize, f32), value: impl Fn(usize) -> f32) -> f32 {
+pub(super) fn blend((i, f): (usize, f32), value: impl Fn(usize) -> f32) -> f32 {
     value(i) * (1.0 - f) + value(i + 1) * f
 }
 

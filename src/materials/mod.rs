@@ -13,6 +13,7 @@
 mod clearcoat;
 mod conductor;
 mod dielectric;
+mod dielectric_albedo;
 mod diffuse;
 mod inputs;
 mod layer_albedo;
@@ -618,10 +619,11 @@ mod tests {
         }
     }
 
-    /// A white rough dielectric never scatters more flux than it receives (photons: no
-    /// 1 / eta^2), and all of it at small roughness (within 0.3%), total internal reflection from
-    /// inside included; at alpha 0.25 single scattering loses at most 4% seen from outside at 60
-    /// degrees (measured: 1% head on, 4% at 60 degrees, 9% at grazing; 7% to 23% from inside).
+    /// A white rough dielectric scatters all the flux it receives (photons: no 1 / eta^2), from
+    /// outside and inside, total internal reflection included: within 0.3% at small roughness,
+    /// and within 1.5% at alpha 0.25 and 1 where single scattering alone loses up to 58%
+    /// (`dielectric_albedo.rs` gives it back), except seen at grazing from inside (cosine 0.15),
+    /// within 3%.
     #[test]
     fn a_rough_dielectric_conserves_energy() {
         for ior in [1.33, 1.5, 2.4] {
@@ -630,30 +632,31 @@ mod tests {
                 for mu in [1.0f32, 0.5, 0.15, -1.0, -0.5, -0.15] {
                     let wo = Vec3::new((1.0 - mu * mu).sqrt(), 0.0, mu);
                     let energy = scattered(glass, wo, Transport::Importance).x;
-                    assert!(energy < 1.002, "ior {ior}, alpha {alpha}, mu {mu}: {energy}");
-                    let lost = match alpha {
-                        0.25 if mu >= 0.5 => 0.05,
+                    let tolerance = match alpha {
                         a if a <= 0.01 => 0.003,
-                        _ => 1.0,
+                        _ if mu == -0.15 => 0.03,
+                        _ => 0.015,
                     };
-                    assert!(energy > 1.0 - lost, "ior {ior}, alpha {alpha}, mu {mu}: {energy}");
+                    assert!((energy - 1.0).abs() < tolerance, "ior {ior}, alpha {alpha}, mu {mu}: {energy}");
                 }
             }
         }
     }
 
-    /// Radiance through a boundary is scaled by the squared ratio of the indices, so the BSDF is
-    /// reciprocal once each side's index is multiplied in: `f(a, b) n(b)^2 = f(b, a) n(a)^2`
-    /// (Veach 1997, 5.2).
+    /// Radiance through a boundary is scaled by the squared ratio of the indices, so the
+    /// single-scattering BSDF is reciprocal once each side's index is multiplied in:
+    /// `f(a, b) n(b)^2 = f(b, a) n(a)^2` (Veach 1997, 5.2). (Its energy compensation depends on
+    /// the outgoing direction alone: `rough_dielectric.rs`.)
     #[test]
     fn rough_dielectric_is_reciprocal_up_to_the_indices() {
         let mut rng = stream(11, Stream::Eye, 0, 0);
         let index = |w: Vec3| if w.z > 0.0 { 1.0 } else { 1.5f32 * 1.5 };
         for alpha in [0.1, 0.6] {
-            let glass = rough_glass(alpha);
+            let glass = RoughDielectric { ior: 1.5, alpha, tint: Vec4::new(1.0, 0.7, 0.4, 0.9) };
+            let f = |a, b| glass.single_scattering(FRAME, a, b);
             for _ in 0..2000 {
                 let (a, b) = (square_to_sphere(rng.next_2d()), square_to_sphere(rng.next_2d()));
-                let (ab, ba) = (glass.eval(FRAME, a, b) * index(b), glass.eval(FRAME, b, a) * index(a));
+                let (ab, ba) = (f(a, b) * index(b), f(b, a) * index(a));
                 assert!((ab - ba).abs().max_element() <= 1e-4 * ab.max_element().max(1.0), "{ab} vs {ba}");
             }
         }

@@ -12,14 +12,20 @@
 //! is multiplied by the material's transmission tint. A dispersive path follows its hero
 //! wavelength's index through the same microfacet normal.
 //!
-//! Single scattering only: light that bounces between microfacets is lost, where Cycles'
-//! Multiscatter GGX gives it back. At roughness 0.5 (alpha 0.25) and index 1.5 that is 1% seen
-//! head on from outside, 4% at 60 degrees, 9% at grazing and 7% to 20% from inside; at
-//! roughness 1, 11% to 58% (`a_rough_dielectric_conserves_energy` measures it).
+//! Single scattering loses the light that bounces between microfacets: at roughness 0.5 (alpha
+//! 0.25) and index 1.5, 1% seen head on from outside, 4% at 60 degrees, 9% at grazing and 7% to
+//! 20% from inside; at roughness 1, 11% to 58%. As Cycles' Multiscatter GGX glass does, the
+//! boundary is divided by its single-scattering albedo `E(wo)` (`dielectric_albedo.rs`), which
+//! gives that light back spread like the single-scattered light (`a_rough_dielectric_conserves_energy`).
+//! The scaled BSDF depends on `wo` alone through `E`, so it is no longer reciprocal: photons,
+//! arriving from `wo`, keep their flux exactly; camera paths, leaving toward `wo`, are scaled
+//! for the direction they see (Cycles' choice). The single-scattering term itself is reciprocal
+//! up to the indices (`single_scattering`).
 
 use glam::{Vec2, Vec3};
 
 use super::dielectric::{fresnel_dielectric, refract, side};
+use super::dielectric_albedo::glass_albedo;
 use super::microfacet::{self, distribution, masking, masking_shadowing, reflect};
 use super::{face_toward, BsdfSample, ShadingFrame, Transport};
 use crate::spectrum::SampledSpectrum;
@@ -50,9 +56,26 @@ fn refraction_scale(eta: f32, mode: Transport) -> f32 {
     }
 }
 
+/// Albedos below this are not divided by (a grazing view of a very rough boundary from inside,
+/// which scatters almost nothing once), so that no weight grows without bound.
+const SMALLEST_ALBEDO: f32 = 0.1;
+
 impl RoughDielectric {
-    /// The BSDF value for radiance arriving from `wi`, leaving toward `wo`.
+    /// The BSDF value for radiance arriving from `wi`, leaving toward `wo`: the single-scattering
+    /// value over the boundary's albedo seen from `wo`.
     pub fn eval(&self, frame: ShadingFrame, wo: Vec3, wi: Vec3) -> SampledSpectrum {
+        self.single_scattering(frame, wo, wi) * self.compensation(frame, wo)
+    }
+
+    /// `1 / E(wo)`: what gives back the light single scattering loses between microfacets.
+    pub fn compensation(&self, frame: ShadingFrame, wo: Vec3) -> f32 {
+        let (n, eta) = side(self.ior, frame, wo);
+        1.0 / glass_albedo(self.alpha, eta, n.dot(wo).abs()).max(SMALLEST_ALBEDO)
+    }
+
+    /// The single-scattering BSDF (Walter et al. 2007) for radiance arriving from `wi`, leaving
+    /// toward `wo`.
+    pub fn single_scattering(&self, frame: ShadingFrame, wo: Vec3, wi: Vec3) -> SampledSpectrum {
         let (n, eta) = side(self.ior, frame, wo);
         let (wo, wi, _) = microfacet::to_frame(n, wo, wi);
         if wo.z <= 0.0 || wi.z == 0.0 {
@@ -123,6 +146,7 @@ impl RoughDielectric {
         };
         let g = masking_shadowing(self.alpha, wo_local, wi) / masking(self.alpha, wo_local);
         let world = (t * wi.x + b * wi.y + n * wi.z).normalize();
-        Some(BsdfSample { wi: world, weight: weight * g, pdf: self.pdf(frame, wo, world), is_delta: false })
+        let weight = weight * (g * self.compensation(frame, wo));
+        Some(BsdfSample { wi: world, weight, pdf: self.pdf(frame, wo, world), is_delta: false })
     }
 }

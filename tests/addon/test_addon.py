@@ -293,6 +293,42 @@ class Export(unittest.TestCase):
         bpy.ops.export_scene.gltf(filepath=str(own), export_format='GLTF_SEPARATE', export_extras=True)
         self.assertNotIn("caustic", own.read_text())
 
+    def test_volume_absorption_travels_as_khr_materials_volume_converted_exactly(self):
+        """A Volume Absorption node (Color C, Density D) on a glass becomes KHR_materials_volume with
+        attenuation distance 1/D and colour exp(-(1 - C)), which keeps exp(-(1 - C) D) per unit of
+        length as Cycles does; a Principled Volume's absorption likewise, its scattering warned of."""
+        scene = glass_sphere_scene()
+        glass = bpy.data.materials["Glass"]
+        nodes, links = glass.node_tree.nodes, glass.node_tree.links
+        absorption = nodes.new("ShaderNodeVolumeAbsorption")
+        absorption.inputs["Color"].default_value = (0.2, 0.6, 0.9, 1.0)
+        absorption.inputs["Density"].default_value = 4.0
+        links.new(absorption.outputs["Volume"], nodes["Material Output"].inputs["Volume"])
+        principled = material("Smoky", transmission=1.0)
+        add(bpy.ops.mesh.primitive_cube_add, principled, size=0.5, location=(2, 0, 0.25))
+        volume = principled.node_tree.nodes.new("ShaderNodeVolumePrincipled")
+        volume.inputs["Color"].default_value = (0.5, 0.5, 0.5, 1.0)
+        volume.inputs["Absorption Color"].default_value = (0.25, 0.64, 1.0, 1.0)
+        volume.inputs["Density"].default_value = 2.0
+        principled.node_tree.links.new(volume.outputs["Volume"],
+                                       principled.node_tree.nodes["Material Output"].inputs["Volume"])
+        path = OUT / "volume" / "scene.gltf"
+        path.parent.mkdir()
+        sys.modules["caustic.export"].export(scene, path)
+        materials = {m["name"]: m for m in json.loads(path.read_text())["materials"]}
+        written = materials["Glass"]["extensions"]["KHR_materials_volume"]
+        np.testing.assert_allclose(written["attenuationColor"], np.exp(-(1 - np.array([0.2, 0.6, 0.9]))), rtol=1e-6)
+        self.assertAlmostEqual(written["attenuationDistance"], 0.25, places=6)
+        self.assertGreater(written["thicknessFactor"], 0)
+        smoky = materials["Smoky"]["extensions"]["KHR_materials_volume"]
+        k = 0.5 * (1 - np.sqrt([0.25, 0.64, 1.0]))
+        np.testing.assert_allclose(smoky["attenuationColor"], np.exp(-k), rtol=1e-6)
+        self.assertAlmostEqual(smoky["attenuationDistance"], 0.5, places=6)
+        warnings = sys.modules["caustic.export"].scene_warnings(bpy.context.evaluated_depsgraph_get())
+        self.assertIn("material 'Smoky': the Principled Volume's scattering is not rendered (its absorption is)",
+                      warnings)
+        self.assertFalse([w for w in warnings if "'Glass'" in w], warnings)
+
 
 if __name__ == "__main__":
     unittest.main(verbosity=2)
