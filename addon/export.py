@@ -1,8 +1,8 @@
 """The scene as glTF 2.0 through Blender's own exporter, plus what the exporter drops, written into
 the `caustic` extras (docs/extras.md) by the exporter's hooks while Caustic exports: area lights,
 the sun's angle, the camera's depth of field, the shutter, the frame rate, the resolution (with its
-percentage), the active camera, the world's colour and dispersion; and a glass's volume absorption
-as `KHR_materials_volume` (`volume_absorption`).
+percentage), the active camera, the world's colour, dispersion and volume priorities; and a
+glass's volume absorption as `KHR_materials_volume` (`volume_absorption`).
 
 The hooks change nothing in the user's data: they add extras to what is being written, and
 complete two values of the layers the exporter leaves out (`complete_layers`).
@@ -93,13 +93,16 @@ def node_extras(blender_object):
 
 
 def material_extras(material):
-    """Dispersion from the material's Caustic settings."""
+    """Dispersion and the volume's priority from the material's Caustic settings."""
     settings = getattr(material, "caustic", None)
-    if settings is None or settings.dispersion == 'NONE':
+    if settings is None:
         return None
+    extras = {"priority": settings.priority} if settings.priority else {}
     if settings.dispersion == 'ABBE':
-        return {"abbe": settings.abbe}
-    return {"glass": settings.glass}
+        extras["abbe"] = settings.abbe
+    elif settings.dispersion == 'GLASS':
+        extras["glass"] = settings.glass
+    return extras or None
 
 
 def add_extras(gltf_object, caustic):

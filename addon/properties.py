@@ -41,7 +41,8 @@ class CausticRenderSettings(bpy.types.PropertyGroup):
 
 
 class CausticMaterialSettings(bpy.types.PropertyGroup):
-    """`material.caustic`: how a glass's index of refraction depends on wavelength."""
+    """`material.caustic`: how a glass's index of refraction depends on wavelength, and which
+    volume fills where two overlap."""
 
     dispersion: EnumProperty(
         name="Dispersion",
@@ -52,6 +53,9 @@ class CausticMaterialSettings(bpy.types.PropertyGroup):
     abbe: FloatProperty(name="Abbe Number", default=40.0, min=1.0, max=200.0,
                         description="Abbe number V_d: lower disperses more (flint glass about 30, crown about 60)")
     glass: EnumProperty(name="Glass", items=GLASSES, default="BK7")
+    priority: IntProperty(name="Volume Priority", default=0, min=-1000, max=1000,
+                          description="Where this glass's volume overlaps another's (water modelled into its glass's "
+                                      "wall, ice in water), the volume of highest priority fills the overlap")
 
 
 def repository_binaries():

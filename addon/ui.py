@@ -1,4 +1,4 @@
-"""Panels: the renderer's settings, dispersion on materials, and Blender's own camera
+"""Panels: the renderer's settings, dispersion and volume priority on materials, and Blender's own camera
 depth-of-field, light, motion-blur, material and world panels shown for Caustic (they list their
 engines explicitly, so a third-party engine must add itself)."""
 
@@ -42,8 +42,8 @@ class RENDER_PT_caustic_sampling(CausticPanel, bpy.types.Panel):
         layout.prop(settings, "threads")
 
 
-class MATERIAL_PT_caustic_dispersion(CausticPanel, bpy.types.Panel):
-    bl_label = "Dispersion"
+class MATERIAL_PT_caustic_glass(CausticPanel, bpy.types.Panel):
+    bl_label = "Glass"
     bl_context = "material"
 
     @classmethod
@@ -59,9 +59,10 @@ class MATERIAL_PT_caustic_dispersion(CausticPanel, bpy.types.Panel):
             layout.prop(settings, "abbe")
         elif settings.dispersion == 'GLASS':
             layout.prop(settings, "glass")
+        layout.prop(settings, "priority")
 
 
-CLASSES = (RENDER_PT_caustic_sampling, MATERIAL_PT_caustic_dispersion)
+CLASSES = (RENDER_PT_caustic_sampling, MATERIAL_PT_caustic_glass)
 
 
 def blender_panels():

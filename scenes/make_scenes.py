@@ -15,15 +15,29 @@ Writes scenes/<name>.gltf and scenes/<name>.bin:
   depth of field;
 - shot / shot_moving_camera: the demo box over 24 frames with its glass sphere standing still and
   a small cube sliding across the floor, seen from a still camera (or a dollying one): the shot
-  that reuse across frames is measured on (`caustic bench --frames`).
+  that reuse across frames is measured on (`caustic bench --frames`);
+- gems: a diamond and a blue sapphire, cut with facets, dispersive, the sapphire coloured by a
+  Volume Absorption node, under a small bright light;
+- water_glass: a tumbler of blue-green water (a Volume Absorption node, dispersive water) with a
+  frosted ice cube floating in it, under a low sun-like light.
 
 Blender's exporter drops area lights and the render resolution, so they travel as `caustic`
-custom properties, which the exporter writes as glTF extras (see docs/extras.md).
+custom properties, which the exporter writes as glTF extras (see docs/extras.md). The gems and the
+glass of water are exported through the add-on (addon/), as an artist's would be: it writes their
+dispersion, volume priorities and absorption.
 """
 import math
+import os
 import pathlib
+import sys
+import tempfile
 
-import bpy
+# The add-on is enabled in a temporary home, not the user's own Blender settings (unless a script
+# that imported bpy first chose the home).
+if "bpy" not in sys.modules:
+    os.environ["HOME"] = tempfile.mkdtemp(prefix="caustic-scenes-home-")
+import bpy  # noqa: E402
+import bmesh  # noqa: E402
 
 HERE = pathlib.Path(__file__).resolve().parent
 
@@ -117,17 +131,142 @@ def export(name, animated=False):
     bpy.ops.export_scene.gltf(**options)
 
 
-def glass_material():
-    return material("Glass", (1.0, 1.0, 1.0), roughness=0.0, transmission=1.0, ior=1.5)
+def reset_with_addon():
+    """An empty file with the add-on enabled (as a user enables it), for the material settings it
+    adds and its export."""
+    import addon_utils
+    reset()
+    addons = pathlib.Path(bpy.utils.user_resource('SCRIPTS', path="addons", create=True))
+    if not (addons / "caustic").exists():
+        (addons / "caustic").symlink_to(HERE.parent / "addon")
+        bpy.utils.refresh_script_paths()
+    addon_utils.enable("caustic", default_set=True, handle_error=None)
 
 
-def cornell_box_with_glass():
-    """The demo box's walls (white, red and green) and the glass material; gives the glass."""
+def export_with_addon(name):
+    """Exports the scene through the add-on, which writes what Blender's exporter drops or writes
+    otherwise (dispersion, volume priority, absorption)."""
+    sys.modules["caustic.export"].export(bpy.context.scene, HERE / f"{name}.gltf")
+
+
+def absorbing(m, colour, density):
+    """Gives material `m` a Volume Absorption node of `colour` and `density`."""
+    nodes = m.node_tree.nodes
+    node = nodes.new("ShaderNodeVolumeAbsorption")
+    node.inputs["Color"].default_value = (*colour, 1.0)
+    node.inputs["Density"].default_value = density
+    m.node_tree.links.new(node.outputs["Volume"], nodes["Material Output"].inputs["Volume"])
+    return m
+
+
+def brilliant(name, radius, location, mat, facets=16):
+    """A round brilliant cut (approximately): a table, a crown of facets down to the girdle and a
+    pavilion down to the culet, flat-shaded."""
+    mesh = bpy.data.meshes.new(name)
+    bm = bmesh.new()
+    ring = lambda r, z, turn: [bm.verts.new((r * math.cos(2 * math.pi * (i + turn) / facets),
+                                             r * math.sin(2 * math.pi * (i + turn) / facets), z))
+                               for i in range(facets)]
+    table, girdle_top = ring(0.55 * radius, 0.33 * radius, 0.5), ring(radius, 0.03 * radius, 0.0)
+    girdle_bottom, culet = ring(radius, -0.03 * radius, 0.0), bm.verts.new((0, 0, -0.86 * radius))
+    bm.faces.new(table)
+    for i in range(facets):
+        j = (i + 1) % facets
+        bm.faces.new((girdle_top[i], girdle_top[j], table[i]))
+        bm.faces.new((table[i], girdle_top[j], table[j]))
+        bm.faces.new((girdle_bottom[i], girdle_bottom[j], girdle_top[j], girdle_top[i]))
+        bm.faces.new((girdle_bottom[j], girdle_bottom[i], culet))
+    bmesh.ops.recalc_face_normals(bm, faces=bm.faces)
+    bm.to_mesh(mesh)
+    bm.free()
+    obj = bpy.data.objects.new(name, mesh)
+    bpy.context.scene.collection.objects.link(obj)
+    obj.location = location
+    mesh.materials.append(mat)
+    return obj
+
+
+def world(colour, strength=1.0):
+    """A uniform world of `colour` (a Background node)."""
+    w = bpy.data.worlds.new("World")
+    w.use_nodes = True
+    w.node_tree.nodes["Background"].inputs["Color"].default_value = (*colour, 1.0)
+    w.node_tree.nodes["Background"].inputs["Strength"].default_value = strength
+    bpy.context.scene.world = w
+
+
+def make_gems():
+    """A diamond and a blue sapphire on a dark stone, under a small bright light: dispersion
+    (fire) in both, absorption in the sapphire."""
+    reset_with_addon()
+    plane("Stone", 6, (0, 0, 0), (0, 0, 0), material("Stone", (0.05, 0.05, 0.06), roughness=0.6))
+    diamond = material("Diamond", (1.0, 1.0, 1.0), roughness=0.0, transmission=1.0, ior=2.417)
+    diamond.caustic.dispersion, diamond.caustic.glass = 'GLASS', 'diamond'
+    sapphire = absorbing(material("Sapphire", (1.0, 1.0, 1.0), roughness=0.0, transmission=1.0, ior=1.768),
+                         (0.1, 0.3, 0.95), 6.0)
+    sapphire.caustic.dispersion, sapphire.caustic.glass = 'GLASS', 'sapphire'
+    world((0.25, 0.25, 0.27))
+    brilliant("Diamond", 0.35, (-0.45, 0.0, 0.32), diamond)
+    brilliant("Sapphire", 0.3, (0.45, 0.1, 0.28), sapphire)
+    area_light("Spot", (-1.0, -1.5, 3.0), 0.15, 120.0).rotation_euler = (math.radians(30), 0.0, math.radians(-30))
+    camera((0.0, -2.2, 1.4), (0.0, 0.0, 0.2), lens_mm=50.0)
+    set_resolution(480, 320)
+    export_with_addon("gems")
+
+
+def make_water_glass():
+    """A tumbler of blue-green water with a frosted ice cube floating in it on a white table,
+    under a small low light: the glass and water refract and disperse, the water absorbs, the ice
+    (of higher volume priority) fills where it lies in the water, and the water (of lower priority
+    than the glass) is modelled into the glass's wall, as artists avoid coincident faces."""
+    reset_with_addon()
+    plane("Table", 8, (0, 0, 0), (0, 0, 0), material("Table", (0.8, 0.8, 0.78), roughness=0.7))
+    glass = material("Tumbler glass", (1.0, 1.0, 1.0), roughness=0.0, transmission=1.0, ior=1.517)
+    glass.caustic.dispersion, glass.caustic.glass, glass.caustic.priority = 'GLASS', 'BK7', 2
+    bpy.ops.mesh.primitive_cylinder_add(vertices=64, radius=0.4, depth=1.0, location=(0, 0, 0.5))
+    tumbler = bpy.context.object
+    tumbler.name = "Tumbler"
+    bm = bmesh.new()
+    bm.from_mesh(tumbler.data)
+    bmesh.ops.delete(bm, geom=[f for f in bm.faces if f.normal.z > 0.9], context='FACES')
+    bm.to_mesh(tumbler.data)
+    bm.free()
+    solidify = tumbler.modifiers.new("Wall", 'SOLIDIFY')
+    solidify.thickness, solidify.offset = 0.04, -1.0
+    bpy.ops.object.shade_smooth()
+    tumbler.data.materials.append(glass)
+    water = absorbing(material("Water", (1.0, 1.0, 1.0), roughness=0.0, transmission=1.0, ior=1.333),
+                      (0.55, 0.85, 0.8), 1.5)
+    water.caustic.dispersion, water.caustic.glass = 'GLASS', 'water'
+    # Into the glass's wall and floor by 0.01 (the glass, of higher priority, fills the overlap).
+    bpy.ops.mesh.primitive_cylinder_add(vertices=64, radius=0.37, depth=0.68, location=(0, 0, 0.37))
+    bpy.ops.object.shade_smooth()
+    bpy.context.object.name = "Water"
+    bpy.context.object.data.materials.append(water)
+    ice = material("Ice", (1.0, 1.0, 1.0), roughness=0.25, transmission=1.0, ior=1.309)
+    ice.caustic.priority = 3
+    bpy.ops.mesh.primitive_cube_add(size=0.3, location=(0.05, -0.08, 0.7), rotation=(0.2, 0.3, 0.5))
+    bpy.context.object.name = "Ice"
+    bpy.context.object.data.materials.append(ice)
+    world((0.3, 0.32, 0.35))
+    area_light("Sun", (-2.5, 2.0, 1.6), 0.4, 400.0).rotation_euler = (math.radians(60), 0.0, math.radians(-130))
+    camera((0.0, -2.8, 1.5), (0.0, 0.0, 0.45), lens_mm=45.0)
+    set_resolution(320, 400)
+    export_with_addon("water_glass")
+
+
+def glass_material(roughness=0.0):
+    return material("Glass", (1.0, 1.0, 1.0), roughness=roughness, transmission=1.0, ior=1.5)
+
+
+def cornell_box_with_glass(roughness=0.0):
+    """The demo box's walls (white, red and green) and the glass material (smooth, or frosted by
+    `roughness`); gives the glass."""
     white = material("White", (0.75, 0.75, 0.75))
     red = material("Red", (0.63, 0.065, 0.05))
     green = material("Green", (0.14, 0.45, 0.091))
     cornell_box(white, red, green)
-    return glass_material()
+    return glass_material(roughness)
 
 
 def cornell_box(white, red, green):
@@ -138,10 +277,11 @@ def cornell_box(white, red, green):
     plane("RightWall", 2, (1, 0, 1), (0, -math.pi / 2, 0), green)
 
 
-def cornell_glass_scene(sphere_segments=96):
-    """The demo scene, built but not exported (`sphere_segments` around the sphere)."""
+def cornell_glass_scene(sphere_segments=96, roughness=0.0):
+    """The demo scene, built but not exported (`sphere_segments` around the sphere; the glass
+    frosted by `roughness`)."""
     reset()
-    glass = cornell_box_with_glass()
+    glass = cornell_box_with_glass(roughness)
     # A sphere of radius R and index 1.5 focuses at about 1.5 R beyond its centre: floating it
     # 0.2 above the floor puts the light's image near the floor, a sharp caustic.
     glass_sphere((0.3, -0.3, 0.55), 0.35, glass, sphere_segments)
@@ -279,6 +419,8 @@ def make_shot(moving_camera):
 
 
 if __name__ == "__main__":
+    make_gems()
+    make_water_glass()
     make_shot(moving_camera=False)
     make_shot(moving_camera=True)
     make_cornell_animated()

@@ -75,6 +75,10 @@ pub struct Material {
     pub sheen: Option<Sheen>,
     /// What absorbs inside, where light is transmitted (`KHR_materials_volume`).
     pub volume: Option<Volume>,
+    /// Where the insides of two transmissive closed meshes overlap, the one of highest priority
+    /// fills the overlap (the `caustic` extras' `priority`; equal priorities: the one entered
+    /// last).
+    pub priority: i32,
 }
 
 /// What a path meets at a surface point: a BSDF in its frame, and the factor on the path's
@@ -219,6 +223,7 @@ impl Material {
             clearcoat: None,
             sheen: None,
             volume: None,
+            priority: 0,
         }
     }
 
@@ -282,6 +287,12 @@ impl Material {
                 bsdf,
                 Bsdf::Dielectric { .. } | Bsdf::ThinDielectric { .. } | Bsdf::RoughDielectric { .. }
             )
+    }
+
+    /// Whether a path refracting into it is inside it until it refracts out: transmissive on a
+    /// closed mesh (not a thin wall).
+    pub fn has_inside(&self) -> bool {
+        self.transmission > 0.0 && !self.thin
     }
 
     /// Whether light passes through unchanged (a thin fully transmissive wall of index 1, as area

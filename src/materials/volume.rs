@@ -22,16 +22,13 @@ pub struct Volume {
     distance: f32,
     /// `thicknessFactor`: the wall's thickness where the mesh is open.
     pub thickness: f32,
-    /// Where volumes overlap, the one of highest priority fills the overlap (the `caustic`
-    /// extras' `priority`; equal priorities: the one entered last).
-    pub priority: i32,
 }
 
 impl Volume {
-    /// The volume of attenuation colour `colour` (linear, in [0, 1]) at `distance` (positive),
-    /// `thickness` (non-negative) and `priority`; the caller checks the values.
-    pub fn new(colour: Vec3, distance: f32, thickness: f32, priority: i32) -> Self {
-        Volume { colour: RgbSpectrum::reflectance(colour), distance, thickness, priority }
+    /// The volume of attenuation colour `colour` (linear, in [0, 1]) at `distance` (positive) and
+    /// `thickness` (non-negative); the caller checks the values.
+    pub fn new(colour: Vec3, distance: f32, thickness: f32) -> Self {
+        Volume { colour: RgbSpectrum::reflectance(colour), distance, thickness }
     }
 
     /// The absorption coefficient at the wavelengths `lambda`, per world unit.
@@ -64,10 +61,10 @@ mod tests {
     #[test]
     fn a_grey_volume_keeps_its_colour_to_the_power_of_distances_travelled() {
         let lambda = Wavelengths::sampled(0.3);
-        let volume = Volume::new(Vec3::splat(0.25), 2.0, 0.0, 0);
+        let volume = Volume::new(Vec3::splat(0.25), 2.0, 0.0);
         let through = volume.transmittance(&lambda, 3.0);
         assert!((through - Vec4::splat(0.25f32.powf(1.5))).abs().max_element() < 1e-5, "{through}");
-        let clear = Volume::new(Vec3::ONE, 1.0, 0.0, 0);
+        let clear = Volume::new(Vec3::ONE, 1.0, 0.0);
         assert_eq!(clear.transmittance(&lambda, f32::INFINITY), Vec4::ONE);
         assert_eq!(volume.transmittance(&lambda, f32::INFINITY), Vec4::ZERO);
     }
@@ -75,7 +72,7 @@ mod tests {
     #[test]
     fn a_coloured_volume_absorbs_most_where_its_colour_is_darkest() {
         let lambda = Wavelengths { nm: Vec4::new(450.0, 530.0, 610.0, 650.0), ..Wavelengths::sampled(0.5) };
-        let red = Volume::new(Vec3::new(0.9, 0.1, 0.1), 1.0, 0.0, 0).transmittance(&lambda, 1.0);
+        let red = Volume::new(Vec3::new(0.9, 0.1, 0.1), 1.0, 0.0).transmittance(&lambda, 1.0);
         assert!(red.w > 0.7 && red.x < 0.2 && red.y < 0.2, "{red}");
     }
 }

@@ -68,11 +68,12 @@ pub fn material(
     let sheen = sheen(m, document, images).map_err(in_material)?;
     let extras: MaterialExtras =
         extras::parse(m.extras()).map_err(|e| in_material(format!("extras `caustic`: {e}")))?;
-    let volume = volume(m, extras.priority.unwrap_or(0)).map_err(in_material)?;
+    let volume = volume(m).map_err(in_material)?;
     let ior = dispersion_law(m, &extras).map_err(in_material)?;
     Ok(Material {
         ior,
         volume,
+        priority: extras.priority.unwrap_or(0),
         clearcoat,
         sheen,
         specular,
@@ -201,11 +202,11 @@ fn sheen(
 }
 
 /// `KHR_materials_volume` (read raw, so that values the gltf crate lets through are refused here
-/// by name) with the volume's `priority`, or `None` where nothing is absorbed: without the
+/// by name), or `None` where nothing is absorbed: without the
 /// extension, without an attenuation distance (glTF's default: infinite), with a white colour,
 /// or with a thickness factor of 0, which glTF reads as a thin wall without a volume (warned of
 /// by `gltf_unrendered`).
-fn volume(m: &gltf::Material, priority: i32) -> Result<Option<Volume>, String> {
+fn volume(m: &gltf::Material) -> Result<Option<Volume>, String> {
     const EXTENSION: &str = "KHR_materials_volume";
     let Some(value) = m.extension_value(EXTENSION) else {
         return Ok(None);
@@ -230,7 +231,7 @@ fn volume(m: &gltf::Material, priority: i32) -> Result<Option<Volume>, String> {
     };
     let distance = distance.map_or(f32::INFINITY, |d| d as f32);
     let absorbs = distance.is_finite() && colour != Vec3::ONE && thickness > 0.0;
-    Ok(absorbs.then(|| Volume::new(colour, distance, thickness as f32, priority)))
+    Ok(absorbs.then(|| Volume::new(colour, distance, thickness as f32)))
 }
 
 /// A JSON array of three numbers in [0, 1], as a colour.

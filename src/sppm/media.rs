@@ -1,13 +1,14 @@
-//! The absorbing volumes a path is inside ([`crate::materials::Volume`]), as a stack of the
-//! closed meshes' materials it has refracted into and not yet out of: each segment is attenuated
-//! by the volume of highest priority among them (of equal priorities, the one entered last), so an
-//! ice cube in tinted water absorbs as ice, and where water and its glass overlap (a water surface
-//! modelled into the glass wall, as artists do to avoid coincident faces) the priority says which
-//! fills the overlap.
+//! The insides a path is in, as a stack of the transmissive closed meshes' materials it has
+//! refracted into and not yet out of: each segment is attenuated by the absorbing volume
+//! ([`crate::materials::Volume`]) of the inside of highest priority among them (of equal
+//! priorities, the one entered last; a clear one absorbs nothing), so a clear ice cube in tinted
+//! water absorbs nothing, and where water and its glass overlap (a water surface modelled into
+//! the glass wall, as artists do to avoid coincident faces) the priority says which fills the
+//! overlap.
 //!
-//! Paths start in the volumes their start lies in ([`media_at`]: the camera's lens centre, each
+//! Paths start in the insides their start lies in ([`media_at`]: the camera's lens centre, each
 //! light's centre), found by a ray that counts which meshes it leaves without having entered.
-//! Scenes without volumes never look at any of this.
+//! Scenes where nothing absorbs never look at any of this.
 
 use glam::Vec3;
 
@@ -17,10 +18,10 @@ use crate::materials::transmittance;
 use crate::scene::Scene;
 use crate::spectrum::{SampledSpectrum, Wavelengths};
 
-/// Volumes a path can be inside at once; entering one more leaves the innermost out.
+/// Insides a path can be in at once; entering one more leaves the outermost out.
 const DEPTH: usize = 4;
 
-/// The closed meshes' materials with a volume that a path is inside, in the order entered.
+/// The transmissive closed meshes' materials a path is inside, in the order entered.
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
 pub struct Media {
     materials: [u32; DEPTH],
@@ -28,18 +29,18 @@ pub struct Media {
 }
 
 impl Media {
-    /// Inside no volume.
+    /// Inside nothing.
     pub const NONE: Media = Media { materials: [0; DEPTH], len: 0 };
 
-    /// The volumes entered, in order.
+    /// The insides entered, in order.
     fn entered(&self) -> &[u32] {
         &self.materials[..self.len as usize]
     }
 
-    /// The material whose volume fills where the path is: the highest priority, then the last
+    /// The material whose inside fills where the path is: the highest priority, then the last
     /// entered.
     fn filling(&self, scene: &Scene) -> Option<u32> {
-        let priority = |m: u32| scene.materials[m as usize].volume.as_ref().map_or(i32::MIN, |v| v.priority);
+        let priority = |m: u32| scene.materials[m as usize].priority;
         self.entered()
             .iter()
             .rev()
@@ -54,11 +55,10 @@ impl Media {
     }
 
     /// The media after a path at a surface of `material` with outward geometric normal `ng`
-    /// arrived from `wo` and left toward `wi`: crossing into a closed mesh with a volume enters
+    /// arrived from `wo` and left toward `wi`: crossing into a transmissive closed mesh enters
     /// it, crossing out leaves it; reflection and thin walls change nothing.
     pub fn crossed(mut self, scene: &Scene, material: u32, ng: Vec3, wo: Vec3, wi: Vec3) -> Media {
-        let m = &scene.materials[material as usize];
-        if m.volume.is_none() || m.thin || ng.dot(wo) * ng.dot(wi) >= 0.0 {
+        if !scene.materials[material as usize].has_inside() || ng.dot(wo) * ng.dot(wi) >= 0.0 {
             return self;
         }
         if ng.dot(wi) < 0.0 {
@@ -86,11 +86,11 @@ impl Media {
     }
 }
 
-/// Surfaces a ray from a path's start crosses, at most, looking for the volumes it is in.
+/// Surfaces a ray from a path's start crosses, at most, looking for the insides it is in.
 const MAX_CROSSINGS: usize = 64;
 
-/// The volumes `p` lies in: those whose closed meshes a ray from `p` leaves before entering them,
-/// the innermost (the first left) entered last.
+/// The insides `p` lies in: those of the transmissive closed meshes a ray from `p` leaves before
+/// entering them, the innermost (the first left) entered last.
 pub fn media_at(renderer: &Renderer, p: Vec3) -> Media {
     let scene = renderer.scene;
     // Off every axis, so that it does not run along the faces of boxes modelled on the axes.
@@ -99,8 +99,7 @@ pub fn media_at(renderer: &Renderer, p: Vec3) -> Media {
     for _ in 0..MAX_CROSSINGS {
         let Some(hit) = renderer.accel.intersect(origin, direction, f32::INFINITY) else { break };
         let material = scene.triangle_material(hit.triangle);
-        let m = &scene.materials[material as usize];
-        if m.volume.is_some() && !m.thin {
+        if scene.materials[material as usize].has_inside() {
             if hit.ng.dot(direction) < 0.0 {
                 entered.push(material);
             } else if let Some(i) = entered.iter().rposition(|&e| e == material) {

@@ -211,23 +211,23 @@ pub struct Renderer<'a> {
     pub(super) settings: SppmSettings,
     /// Some material's alpha cuts its surface away somewhere: shadow rays look through.
     pub(super) has_cut_away_surfaces: bool,
-    /// Some material absorbs inside: paths keep the stack of volumes they are in.
+    /// Some material absorbs inside: paths keep the stack of the insides they are in.
     pub(super) has_volumes: bool,
-    /// The volumes the camera and each light are in (none where the scene has no volumes).
+    /// The insides the camera and each light are in (none where nothing absorbs).
     start_media: StartMedia,
 }
 
-/// The volumes paths start in.
+/// The insides paths start in.
 #[derive(Default)]
 struct StartMedia {
     /// The camera's (at its lens centre).
     camera: Media,
-    /// Each light's (at its centre), by index; empty when every light is outside all volumes.
+    /// Each light's (at its centre), by index; empty when every light is outside them all.
     lights: Vec<Media>,
 }
 
 impl StartMedia {
-    /// The volumes `renderer`'s camera and lights are in.
+    /// The insides `renderer`'s camera and lights are in.
     fn of(renderer: &Renderer) -> Self {
         if !renderer.has_volumes {
             return StartMedia::default();

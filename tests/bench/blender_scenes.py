@@ -10,10 +10,16 @@ import render_in_blender  # noqa: E402  (sets a temporary HOME, imports bpy and 
 import bpy  # noqa: E402
 
 make_scenes = render_in_blender.make_scenes
+def frosted_glass_scene():
+    """The demo with its sphere frosted (roughness 0.2): a soft caustic."""
+    make_scenes.cornell_glass_scene(roughness=0.2)
+
+
 SCENES = {
     "caustic": make_scenes.cornell_glass_scene,
     "diffuse": make_scenes.cornell_diffuse_scene,
     "spot": make_scenes.spot_glass_scene,
+    "frosted": frosted_glass_scene,
     # The demo with 10x its triangles (a finer sphere), for cost against scene size.
     "caustic_10x_triangles": lambda: make_scenes.cornell_glass_scene(sphere_segments=304),
 }
