@@ -12,7 +12,7 @@
 
 use glam::Vec3;
 
-use super::renderer::Renderer;
+use crate::accel::Accel;
 use crate::geometry::offset_origin;
 use crate::materials::transmittance;
 use crate::scene::Scene;
@@ -91,13 +91,12 @@ const MAX_CROSSINGS: usize = 64;
 
 /// The insides `p` lies in: those of the transmissive closed meshes a ray from `p` leaves before
 /// entering them, the innermost (the first left) entered last.
-pub fn media_at(renderer: &Renderer, p: Vec3) -> Media {
-    let scene = renderer.scene;
+pub fn media_at(scene: &Scene, accel: &Accel, p: Vec3) -> Media {
     // Off every axis, so that it does not run along the faces of boxes modelled on the axes.
     let direction = Vec3::new(0.2113, 0.9331, 0.2910).normalize();
     let (mut origin, mut entered, mut left) = (p, Vec::new(), Vec::new());
     for _ in 0..MAX_CROSSINGS {
-        let Some(hit) = renderer.accel.intersect(origin, direction, f32::INFINITY) else { break };
+        let Some(hit) = accel.intersect(origin, direction, f32::INFINITY) else { break };
         let material = scene.triangle_material(hit.triangle);
         if scene.materials[material as usize].has_inside() {
             if hit.ng.dot(direction) < 0.0 {

@@ -232,7 +232,7 @@ impl StartMedia {
         if !renderer.has_volumes {
             return StartMedia::default();
         }
-        let at = |p: Option<Vec3>| p.map_or(Media::NONE, |p| media_at(renderer, p));
+        let at = |p: Option<Vec3>| p.map_or(Media::NONE, |p| media_at(renderer.scene, renderer.accel, p));
         let lights: Vec<Media> = renderer.scene.lights.iter().map(|l| at(l.centre())).collect();
         let inside = lights.iter().any(|&m| m != Media::NONE);
         StartMedia {
