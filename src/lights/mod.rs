@@ -19,6 +19,7 @@ use std::f32::consts::PI;
 use std::sync::Arc;
 
 use crate::geometry::{corners_scale, offset_origin, one_minus_cos_between, Cone};
+use crate::materials::{Alpha, SurfaceInputs};
 use crate::sampling::{
     basis, square_to_cone, square_to_cosine_hemisphere, square_to_disc, square_to_sphere, square_to_triangle,
 };
@@ -82,6 +83,35 @@ pub enum Emission {
     /// A texture of radiance spectra, read at the texture coordinates of the triangle's corners
     /// (boxed: every light's size is the largest variant's, and few triangles carry a texture).
     Textured(Box<TexturedEmission>),
+    /// Emission where the material's alpha cuts the surface away: the emission times the
+    /// surface's opacity.
+    Cut(Box<CutEmission>),
+}
+
+/// Emission on a triangle that alpha cuts: it glows where the surface is there.
+#[derive(Clone, Debug)]
+pub struct CutEmission {
+    /// What the surface emits where it is there.
+    pub emission: Emission,
+    /// The material's alpha.
+    pub alpha: Alpha,
+    /// Each corner's texture coordinates, one pair per set.
+    pub uvs: [[Vec2; UV_SETS]; 3],
+    /// Each corner's `COLOR_0` alpha.
+    pub vertex_alpha: [f32; 3],
+}
+
+impl CutEmission {
+    /// The probability that the surface is there at barycentric coordinates `b`.
+    fn opacity(&self, b: Vec2) -> f32 {
+        let a = &self.vertex_alpha;
+        let inputs = SurfaceInputs {
+            uv: corner_mix(&self.uvs, b),
+            alpha: a[0] * (1.0 - b.x - b.y) + a[1] * b.x + a[2] * b.y,
+            ..SurfaceInputs::default()
+        };
+        self.alpha.opacity(&inputs)
+    }
 }
 
 /// An emissive texture on one triangle.
@@ -99,18 +129,27 @@ impl Emission {
         match self {
             Emission::Uniform(radiance) => spectral(radiance, lambda),
             Emission::Textured(t) => t.texture.eval(&corner_mix(&t.uvs, b), lambda.nm) * lambda.d65,
+            Emission::Cut(c) => c.emission.at(b, lambda) * c.opacity(b),
         }
     }
 
-    /// The mean luminance over the triangle (a texture's from 64 stratified points), for choosing
-    /// lights by power.
+    /// The luminance at barycentric coordinates `b`.
+    fn luminance_at(&self, b: Vec2) -> f64 {
+        match self {
+            Emission::Uniform(radiance) => radiance.luminance(),
+            Emission::Textured(t) => t.texture.luminance(&corner_mix(&t.uvs, b)),
+            Emission::Cut(c) => c.emission.luminance_at(b) * f64::from(c.opacity(b)),
+        }
+    }
+
+    /// The mean luminance over the triangle (where it varies, from 64 stratified points), for
+    /// choosing lights by power.
     fn mean_luminance(&self) -> f64 {
         match self {
             Emission::Uniform(radiance) => radiance.luminance(),
-            Emission::Textured(t) => {
-                let (texture, uvs) = (&t.texture, &t.uvs);
+            _ => {
                 let points = (0..64).map(|i| Vec2::new((i % 8) as f32 + 0.5, (i / 8) as f32 + 0.5) / 8.0);
-                points.map(|u| texture.luminance(&corner_mix(uvs, square_to_triangle(u)))).sum::<f64>() / 64.0
+                points.map(|u| self.luminance_at(square_to_triangle(u))).sum::<f64>() / 64.0
             }
         }
     }

@@ -257,7 +257,8 @@ impl Material {
     }
 
     /// The emitted spectral radiance at a surface point and `lambda` leaving toward `wo` from a
-    /// face of normal `ng`.
+    /// face of normal `ng`, times the probability that alpha leaves the surface there (a path
+    /// passes where it is cut away, so its emission counts where it is there).
     pub fn emitted(
         &self,
         inputs: &SurfaceInputs,
@@ -265,11 +266,16 @@ impl Material {
         ng: Vec3,
         wo: Vec3,
     ) -> SampledSpectrum {
-        match (&self.emission, &self.emission_texture) {
+        let radiance = match (&self.emission, &self.emission_texture) {
             (Some(_), _) if !self.emits_both_sides && ng.dot(wo) <= 0.0 => Vec4::ZERO,
             (Some(_), Some(texture)) => texture.eval(&inputs.uv, lambda.nm) * lambda.d65,
             (Some(spectrum), None) => spectrum.eval_lanes(lambda.nm) * lambda.d65,
             (None, _) => Vec4::ZERO,
+        };
+        if self.alpha.cuts() {
+            radiance * self.alpha.opacity(inputs)
+        } else {
+            radiance
         }
     }
 

@@ -31,10 +31,6 @@ pub fn material_warnings(m: &gltf::Material) -> Vec<String> {
         .collect();
     unrendered.extend(unrendered_textures(m));
     unrendered.extend(unrendered_volume(m));
-    let emits = m.emissive_factor().iter().any(|&c| c > 0.0) || m.emissive_texture().is_some();
-    if emits && m.alpha_mode() != gltf::material::AlphaMode::Opaque {
-        unrendered.push("alpha does not cut its emission (it glows at full strength where cut away)".into());
-    }
     unrendered.into_iter().map(|what| format!("material '{name}': {what}")).collect()
 }
 

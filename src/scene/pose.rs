@@ -15,7 +15,7 @@ use super::{
 };
 use crate::accel::Bvh;
 use crate::camera::Camera;
-use crate::lights::{BoundingSphere, Emission, EmittingTriangle, Light, TexturedEmission};
+use crate::lights::{BoundingSphere, CutEmission, Emission, EmittingTriangle, Light, TexturedEmission};
 use crate::materials::Material;
 
 /// A span of glTF time, in seconds, that a render covers (frames and their shutters).
@@ -98,16 +98,27 @@ fn triangle_lights(
     (lights, of_triangle)
 }
 
-/// What triangle `t` of `geometry` emits, if its material emits.
+/// What triangle `t` of `geometry` emits, if its material emits (where its alpha leaves it).
 fn emission(geometry: &Geometry, t: &TriangleRef, material: &Material) -> Option<Emission> {
     let radiance = material.emission?;
-    Some(match &material.emission_texture {
+    let uvs = || t.vertices.map(|v| geometry.uvs_at(v as usize));
+    let emission = match &material.emission_texture {
         None => Emission::Uniform(radiance),
         Some(texture) => {
-            let uvs = t.vertices.map(|v| geometry.uvs_at(v as usize));
-            Emission::Textured(Box::new(TexturedEmission { texture: texture.clone(), uvs }))
+            Emission::Textured(Box::new(TexturedEmission { texture: texture.clone(), uvs: uvs() }))
         }
-    })
+    };
+    if !material.alpha.cuts() {
+        return Some(emission);
+    }
+    let alphas = &geometry.extras.alphas;
+    let vertex_alpha = t.vertices.map(|v| alphas.get(v as usize).copied().unwrap_or(1.0));
+    Some(Emission::Cut(Box::new(CutEmission {
+        emission,
+        alpha: material.alpha.clone(),
+        uvs: uvs(),
+        vertex_alpha,
+    })))
 }
 
 /// A punctual light posed with its node's world matrix (the sphere is set by the pose).

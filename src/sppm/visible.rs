@@ -170,6 +170,13 @@ pub fn continue_eye_path(
         if bsdf == Bsdf::Black {
             break;
         }
+        // Passing where alpha cuts the surface away goes on with the sample the last vertex drew
+        // (and took direct light for, if it did).
+        if bsdf == Bsdf::PassThrough {
+            state.origin = offset_origin(surface.p, surface.frame.ng(), -wo, surface.scale).into();
+            state.depth += 1;
+            continue;
+        }
         state.beta *= weight;
         let vertex =
             VisiblePoint::new(surface.p, frame, wo, bsdf, state.beta, state.hero_only, surface.scale);
@@ -203,7 +210,7 @@ pub fn continue_eye_path(
             state.hero_only = true;
         }
         state.beta *= sample.weight;
-        if renderer.has_volumes && bsdf != Bsdf::PassThrough {
+        if renderer.has_volumes {
             state.media = state.media.crossed(scene, surface.material, surface.frame.ng(), wo, sample.wi);
         }
         state.origin = offset_origin(surface.p, surface.frame.ng(), sample.wi, surface.scale).into();
