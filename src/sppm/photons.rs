@@ -115,7 +115,12 @@ pub fn continue_photon(
         };
         // What the volume it crossed absorbed joins the roulette's weight below, so that photons
         // in a dark volume end rather than carry ever less flux.
-        let kept = state.media.transmittance(scene, &pass.wavelengths, hit.t).unwrap_or(SampledSpectrum::ONE);
+        let kept = match renderer.has_volumes {
+            true => {
+                state.media.transmittance(scene, &pass.wavelengths, hit.t).unwrap_or(SampledSpectrum::ONE)
+            }
+            false => SampledSpectrum::ONE,
+        };
         let surface = scene.surface(&hit, &pass.wavelengths);
         let material = &scene.materials[surface.material as usize];
         let wo = -Vec3::from(state.direction);

@@ -145,10 +145,10 @@ pub fn continue_eye_path(
         stats.eye_rays += 1;
         let hit = renderer.accel.intersect(state.origin.into(), state.direction.into(), f32::INFINITY);
         watch(EyeEvent::Segment(&state, hit.map_or(f32::INFINITY, |h| h.t)));
-        if let Some(kept) =
-            state.media.transmittance(scene, &pass.wavelengths, hit.map_or(f32::INFINITY, |h| h.t))
-        {
-            state.beta *= kept;
+        if renderer.has_volumes {
+            let length = hit.map_or(f32::INFINITY, |h| h.t);
+            state.beta *=
+                state.media.transmittance(scene, &pass.wavelengths, length).unwrap_or(SampledSpectrum::ONE);
         }
         let Some(hit) = hit else {
             if !state.lights_sampled {
