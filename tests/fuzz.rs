@@ -128,7 +128,7 @@ fn textured_seed() -> Value {
 
 /// A scene with every volume input Caustic reads: `KHR_materials_volume` on a rough glass box
 /// with a point light inside it, on water overlapping it with a `caustic` priority and the camera
-/// inside, and on a thin pane with a thickness.
+/// inside, and on a frosted thin pane with a thickness.
 fn volume_seed() -> Value {
     let mut gltf = common::GltfBuilder::default();
     let volume = |colour: [f32; 3], roughness: f32, thickness: f32, priority: i32| {
@@ -142,7 +142,7 @@ fn volume_seed() -> Value {
     gltf.mesh("Glass", &common::box_triangles([-0.5, 0.0, -0.5], [0.5, 1.0, 0.5]), glass);
     let water = gltf.material(volume([0.6, 0.8, 0.9], 0.0, 1.0, 0));
     gltf.mesh("Water", &common::box_triangles([-1.0, -0.5, -1.0], [1.0, 0.5, 1.0]), water);
-    let pane = gltf.material(volume([0.9, 0.5, 0.2], 0.0, 0.05, 0));
+    let pane = gltf.material(volume([0.9, 0.5, 0.2], 0.3, 0.05, 0));
     gltf.mesh("Pane", &[[[-1.0, 2.0, -1.0], [-1.0, 2.0, 1.0], [1.0, 2.0, 1.0]]], pane);
     gltf.light(json!({"type": "point", "intensity": 100.0}), [0.0, 0.7, 0.0], [0.0, -1.0, 0.0]);
     gltf.camera([0.0, 0.2, 0.9], [0.0, 0.0, -1.0], 0.8);

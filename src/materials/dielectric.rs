@@ -83,23 +83,42 @@ pub fn sample_thin(
     u: f32,
 ) -> Option<BsdfSample> {
     let n = face_toward(frame.n(), wo);
-    let cos_i = n.dot(wo).min(1.0);
-    let r = fresnel_dielectric(cos_i, ior);
-    if r >= 1.0 {
-        return Some(BsdfSample { wi: reflect(wo, n), weight: Vec4::ONE, pdf: 0.0, is_delta: true });
-    }
-    let cos_t = (1.0 - (1.0 - cos_i * cos_i) / (ior * ior)).max(0.0).sqrt();
-    let a = transmittance(depth, 1.0 / cos_t);
-    let inner = Vec4::ONE / (Vec4::ONE - r * r * a * a);
-    let reflected = r + (1.0 - r) * (1.0 - r) * r * a * a * inner;
-    let through = (1.0 - r) * (1.0 - r) * a * inner;
-    let p_reflect = reflected.element_sum() / (reflected + through).element_sum();
-    let (wi, weight) = if u < p_reflect {
-        (reflect(wo, n), reflected / p_reflect)
+    let wall = ThinWall::at(ior, depth, n.dot(wo).min(1.0));
+    let (wi, weight) = if u < wall.p_reflect {
+        (reflect(wo, n), wall.reflected / wall.p_reflect)
     } else {
-        (-wo, through * tint / (1.0 - p_reflect))
+        (-wo, wall.through * tint / (1.0 - wall.p_reflect))
     };
     Some(BsdfSample { wi, weight, pdf: 0.0, is_delta: true })
+}
+
+/// What a thin wall of index `ior` whose inside absorbs `depth` across it does with light
+/// arriving at cosine `cos_i` to its (micro)surface: what its two faces reflect, inner
+/// reflections included, what passes, and the probability with which reflection is chosen.
+pub struct ThinWall {
+    /// `R + T^2 R a^2 / (1 - R^2 a^2)` at each wavelength.
+    pub reflected: SampledSpectrum,
+    /// `T^2 a / (1 - R^2 a^2)` at each wavelength.
+    pub through: SampledSpectrum,
+    /// Reflection's share of what is not absorbed (mean over the wavelengths).
+    pub p_reflect: f32,
+}
+
+impl ThinWall {
+    /// The wall at cosine `cos_i`.
+    pub fn at(ior: f32, depth: SampledSpectrum, cos_i: f32) -> Self {
+        let r = fresnel_dielectric(cos_i, ior);
+        if r >= 1.0 {
+            return ThinWall { reflected: Vec4::ONE, through: Vec4::ZERO, p_reflect: 1.0 };
+        }
+        let cos_t = (1.0 - (1.0 - cos_i * cos_i) / (ior * ior)).max(0.0).sqrt();
+        let a = transmittance(depth, 1.0 / cos_t);
+        let inner = Vec4::ONE / (Vec4::ONE - r * r * a * a);
+        let reflected = r + (1.0 - r) * (1.0 - r) * r * a * a * inner;
+        let through = (1.0 - r) * (1.0 - r) * a * inner;
+        let p_reflect = reflected.element_sum() / (reflected + through).element_sum();
+        ThinWall { reflected, through, p_reflect }
+    }
 }
 
 #[cfg(test)]

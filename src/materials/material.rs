@@ -443,17 +443,16 @@ impl Material {
     }
 
     /// The transmissive lobe of index `ior` and GGX `alpha` for base colour `base` at `lambda`: a
-    /// thin wall (smooth whatever its roughness) tints what passes by the base colour and absorbs
-    /// across its volume's thickness, a closed mesh's boundary tints by the base colour's square
-    /// root, so that light through both boundaries is tinted by the base colour (Cycles'
-    /// Principled BSDF); what the closed mesh's volume absorbs, the path's segments inside take.
+    /// thin wall tints what passes by the base colour and absorbs across its volume's thickness, a
+    /// closed mesh's boundary tints by the base colour's square root, so that light through both
+    /// boundaries is tinted by the base colour (Cycles' Principled BSDF); what the closed mesh's
+    /// volume absorbs, the path's segments inside take.
     fn transmission_bsdf(&self, ior: f32, alpha: f32, base: SampledSpectrum, lambda: &Wavelengths) -> Bsdf {
         let tint = base.max(Vec4::ZERO);
+        let depth = || self.volume.as_ref().map_or(Vec4::ZERO, |v| v.absorption(lambda) * v.thickness);
         match (self.thin, alpha) {
-            (true, _) => {
-                let depth = self.volume.as_ref().map_or(Vec4::ZERO, |v| v.absorption(lambda) * v.thickness);
-                Bsdf::ThinDielectric { ior, tint, depth }
-            }
+            (true, 0.0) => Bsdf::ThinDielectric { ior, tint, depth: depth() },
+            (true, _) => Bsdf::RoughThinDielectric { ior, alpha, tint, depth: depth() },
             (false, 0.0) => Bsdf::Dielectric { ior, tint: tint.sqrt() },
             (false, _) => Bsdf::RoughDielectric { ior, alpha, tint: tint.sqrt() },
         }

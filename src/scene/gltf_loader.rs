@@ -414,7 +414,7 @@ impl Builder<'_> {
             }
         }
         self.warnings.push(format!(
-            "mesh '{name}': its glass is an open surface, rendered as a smooth thin wall (no refraction, no roughness); close the mesh for solid glass"
+            "mesh '{name}': its glass is an open surface, rendered as a thin wall (no refraction); close the mesh for solid glass"
         ));
     }
 
