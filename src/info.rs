@@ -10,6 +10,8 @@ use crate::materials::Material;
 pub fn report(settings: &RenderSettings) -> Result<Value, String> {
     let description = load_description(settings)?;
     let dispersion = description.materials.iter().any(Material::is_dispersive);
+    let absorption = description.materials.iter().any(|m| m.volume.is_some());
+    let cut_away = description.materials.iter().any(|m| m.alpha.cuts());
     let fps = description.fps;
     let shot = Shot::new(settings, description)?;
     let prepared = shot.prepared();
@@ -18,6 +20,8 @@ pub fn report(settings: &RenderSettings) -> Result<Value, String> {
     let reuse = settings.frames.len() > 1 && fixed > 0;
     let needs = json!({
         "dispersion": dispersion,
+        "absorption": absorption,
+        "alpha": cut_away,
         "motion_blur": shutter.length > 0.0 && prepared.has_motion(),
         "depth_of_field": prepared.lens().is_some(),
         "moving_camera": prepared.camera_moves(),
@@ -43,6 +47,12 @@ pub fn report(settings: &RenderSettings) -> Result<Value, String> {
     }
     if !dispersion {
         skipped.push("wavelength-dependent refraction (no dispersive material)");
+    }
+    if !absorption {
+        skipped.push("absorption along paths, and the stack of insides they are in (no absorbing volume)");
+    }
+    if !cut_away {
+        skipped.push("looking past cut-away surfaces (no material's alpha cuts it)");
     }
     Ok(json!({
         "scene": settings.scene.display().to_string(),

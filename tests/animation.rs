@@ -215,7 +215,8 @@ fn resume_skips_finished_frames() {
 }
 
 /// `caustic info` says what a scene needs: the Blender-exported animated box needs motion blur,
-/// depth of field and a moving camera; the still demo needs none of them and skips their work.
+/// depth of field and a moving camera; the still demo needs none of them (nor absorption, nor
+/// alpha) and skips their work; the glass of water needs absorption.
 #[test]
 fn info_reports_what_a_scene_needs() {
     let info = |scene: &str| {
@@ -242,4 +243,10 @@ fn info_reports_what_a_scene_needs() {
         .unwrap()
         .iter()
         .any(|s| s.as_str().unwrap().contains("lens sampling")));
+    // Absorption: the glass of water's water absorbs, the demo's glass does not.
+    assert_eq!(
+        (still["needs"]["absorption"].as_bool(), still["needs"]["alpha"].as_bool()),
+        (Some(false), Some(false))
+    );
+    assert_eq!(info("water_glass.gltf")["needs"]["absorption"], true);
 }
