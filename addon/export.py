@@ -1,11 +1,12 @@
 """The scene as glTF 2.0 through Blender's own exporter, plus what the exporter drops, written into
 the `caustic` extras (docs/extras.md) by the exporter's hooks while Caustic exports: area lights,
-the sun's angle, the camera's depth of field, the shutter, the frame rate, the resolution (with its
-percentage), the active camera, the world's colour, dispersion and volume priorities; and a
-glass's volume absorption as `KHR_materials_volume` (`volume_absorption`).
+the sun's angle, lights' colour temperature, the camera's depth of field, the shutter, the frame
+rate, the resolution (with its percentage), the active camera, the world's colour, dispersion and
+volume priorities; and a glass's volume absorption as `KHR_materials_volume` (`volume_absorption`).
 
 The hooks change nothing in the user's data: they add extras to what is being written, and
-complete two values of the layers the exporter leaves out (`complete_layers`).
+complete two values of the layers the exporter leaves out (`complete_layers`). Lights with a colour
+temperature have it switched off while the exporter runs (it raises on them) and back on after.
 """
 
 import math
@@ -17,6 +18,12 @@ from bpy.props import StringProperty
 
 # True only while Caustic exports: the hooks stay out of the user's own glTF exports.
 _exporting = False
+
+# While Caustic exports, the colour temperature (kelvin) of each light that uses one, by name:
+# Blender's exporter raises a TypeError on a light with `use_temperature`, so it is switched off
+# for the export and the temperature travels in the extras (the renderer multiplies the colour
+# by a black body's).
+_temperatures = {}
 
 
 def resolution(scene):
@@ -81,11 +88,18 @@ def area_light_extras(light):
 
 
 def node_extras(blender_object):
-    """What the exporter drops from an object: area lights, the sun's angle, the lens."""
-    if blender_object.type == 'LIGHT' and blender_object.data.type == 'AREA':
-        return {"area_light": area_light_extras(blender_object.data)}
-    if blender_object.type == 'LIGHT' and blender_object.data.type == 'SUN':
-        return {"sun_angle_deg": math.degrees(blender_object.data.angle)}
+    """What the exporter drops from an object: area lights, the sun's angle, a light's colour
+    temperature, the lens."""
+    if blender_object.type == 'LIGHT':
+        light = blender_object.data
+        extras = {}
+        if light.type == 'AREA':
+            extras["area_light"] = area_light_extras(light)
+        if light.type == 'SUN':
+            extras["sun_angle_deg"] = math.degrees(light.angle)
+        if light.name in _temperatures:
+            extras["temperature_k"] = _temperatures[light.name]
+        return extras or None
     if blender_object.type == 'CAMERA':
         lens = lens_extras(blender_object)
         return {"lens": lens} if lens else None
@@ -275,10 +289,17 @@ def export(scene, path):
                    use_active_scene=True, export_animations=True, export_animation_mode='SCENE',
                    export_force_sampling=True, export_frame_range=True, export_pointer_animation=False)
     _exporting = True
+    warm = [light for light in bpy.data.lights if getattr(light, "use_temperature", False)]
+    _temperatures.update({light.name: light.temperature for light in warm})
     try:
+        for light in warm:
+            light.use_temperature = False
         with bpy.context.temp_override(scene=scene):
             result = bpy.ops.export_scene.gltf(**options)
     finally:
+        for light in warm:
+            light.use_temperature = True
+        _temperatures.clear()
         _exporting = False
     if result != {'FINISHED'}:
         raise RuntimeError(f"Blender's glTF exporter did not finish ({result})")

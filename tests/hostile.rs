@@ -336,6 +336,20 @@ fn impossible_volumes_are_refused() {
     }
 }
 
+/// A light's colour temperature below 100 K, or not a number, is refused, naming the node and
+/// the field (or the value).
+#[test]
+fn an_impossible_colour_temperature_is_refused() {
+    let dir = tempfile::tempdir().unwrap();
+    let cases = [(json!(-5.0), "temperature_k"), (json!(0.0), "temperature_k"), (json!("warm"), "\"warm\"")];
+    for (i, (kelvin, named)) in cases.into_iter().enumerate() {
+        let path = furnace_edited(dir.path(), &format!("temperature{i}.gltf"), |doc| {
+            doc["nodes"][0]["extras"] = json!({"caustic": {"temperature_k": kelvin}});
+        });
+        assert_refused(&path, &["node 'Enclosure'", named]);
+    }
+}
+
 /// Hostile texture references and attributes render with a warning naming the material or mesh:
 /// a texture on a texture coordinate set Caustic does not carry, and tangents that are not
 /// finite numbers.

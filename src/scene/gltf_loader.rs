@@ -30,7 +30,7 @@ use super::{shapes, tangents, SceneError, TriangleRef, VertexExtras};
 use crate::geometry::Cone;
 use crate::lights::World;
 use crate::materials::{BaseColour, Material};
-use crate::spectrum::{Dispersion, RgbSpectrum};
+use crate::spectrum::{blackbody_colour, Dispersion, RgbSpectrum};
 
 /// glTF photometric units to watts: Blender writes W * 683 / (4 pi) candela and W/m^2 * 683 lux.
 const LUMENS_PER_WATT: f32 = 683.0;
@@ -242,6 +242,18 @@ fn world(w: &extras::WorldExtras, gltf_path: &Path) -> Result<World, String> {
     }
 }
 
+/// The factor on a light's colour from the node's extras: a black body's colour at its colour
+/// temperature (luminance 1), or 1.
+fn light_tint(extras: &NodeExtras, name: &str) -> Result<Vec3, String> {
+    match extras.temperature_k {
+        None => Ok(Vec3::ONE),
+        Some(t) if t.is_finite() && t >= 100.0 => Ok(blackbody_colour(t)),
+        Some(t) => Err(format!(
+            "node '{name}' extras `caustic.temperature_k`: expected a temperature of 100 K or more, got {t}"
+        )),
+    }
+}
+
 /// Blender's sun angle is the full angular diameter; without one the sun is a delta light.
 fn sun_disc(extras: &NodeExtras) -> Cone {
     extras.sun_angle_deg.map_or(Cone::default(), |deg| Cone::from_half_angle(deg.to_radians() / 2.0))
@@ -261,11 +273,12 @@ impl Builder<'_> {
         if let Some(camera) = node.camera() {
             self.add_camera(&camera, node.index(), name, extras.lens.as_ref())?;
         }
+        let tint = light_tint(&extras, name)?;
         if let Some(light) = node.light() {
-            self.add_punctual_light(&light, node.index(), &extras);
+            self.add_punctual_light(&light, node.index(), &extras, tint);
         }
         if let Some(area) = &extras.area_light {
-            self.add_area_light(area, node.index(), name, rig)?;
+            self.add_area_light(area, node.index(), name, rig, tint)?;
         }
         for child in node.children() {
             self.visit(&child, rig)?;
@@ -319,13 +332,15 @@ impl Builder<'_> {
         Ok(())
     }
 
+    /// A `KHR_lights_punctual` light, its colour multiplied by `tint`.
     fn add_punctual_light(
         &mut self,
         light: &gltf::khr_lights_punctual::Light,
         node: usize,
         extras: &NodeExtras,
+        tint: Vec3,
     ) {
-        let colour = Vec3::from(light.color()) * light.intensity() / LUMENS_PER_WATT;
+        let colour = Vec3::from(light.color()) * tint * light.intensity() / LUMENS_PER_WATT;
         let spectrum = RgbSpectrum::illuminant(colour);
         let kind = match light.kind() {
             Kind::Point => PunctualKind::Point(spectrum),
@@ -348,6 +363,7 @@ impl Builder<'_> {
         node: usize,
         name: &str,
         rig: &Rig,
+        tint: Vec3,
     ) -> Result<(), String> {
         if !(area.size > 0.0 && area.power >= 0.0 && area.size.is_finite() && area.power.is_finite()) {
             return Err(format!("node '{name}' area light: size must be positive and power non-negative"));
@@ -359,8 +375,8 @@ impl Builder<'_> {
             .map(|t| t.map(|v| world.transform_point3(v)))
             .map(|[a, b, c]| (b - a).cross(c - a).length() / 2.0)
             .sum();
-        let radiance =
-            Vec3::from(area.color) * area.power / (std::f32::consts::PI * area_m2.max(f32::MIN_POSITIVE));
+        let radiance = Vec3::from(area.color) * tint * area.power
+            / (std::f32::consts::PI * area_m2.max(f32::MIN_POSITIVE));
         let material = self.materials.len() as u32;
         self.materials.push(Material {
             name: format!("area light '{name}'"),

@@ -6,11 +6,13 @@
 //! XYZ with the mean over lanes of `L * cmf(lambda) / p(lambda)`. A path refracted by a
 //! dispersive material goes on with its hero wavelength alone.
 
+pub mod blackbody;
 pub mod dispersion;
 pub mod rgb;
 pub mod tables;
 pub mod wavelength;
 
+pub use blackbody::blackbody_colour;
 pub use dispersion::Dispersion;
 pub use rgb::{RgbSpectrum, Rows, SpectrumImage};
 pub use tables::{

@@ -326,6 +326,26 @@ def glass():
             "Tinted light": floor_disc((1.0, -0.3), 0.3)}
 
 
+def warm_light():
+    """A grey sphere on the floor under a point light of colour temperature 3000 K (Blender's
+    Temperature, which Blender's glTF exporter cannot write) and a cool blue-tinted fill light
+    of 12000 K."""
+    clear()
+    add(bpy.ops.mesh.primitive_plane_add, principled("Floor", Base_Color=(0.8, 0.8, 0.8, 1.0), Roughness=1.0,
+                                                     Specular_IOR_Level=0.0), index=1, size=20)
+    add(bpy.ops.mesh.primitive_uv_sphere_add, principled("Grey", Base_Color=(0.5, 0.5, 0.5, 1.0), Roughness=1.0,
+                                                         Specular_IOR_Level=0.0),
+        index=2, segments=64, ring_count=32, radius=0.8, location=(0.0, 0.0, 0.8))
+    bpy.ops.object.shade_smooth()
+    world((0.01, 0.01, 0.01))
+    for location, kelvin, power in (((1.5, -1.5, 3.0), 3000.0, 800.0), ((-2.5, -1.0, 2.0), 12000.0, 200.0)):
+        light = add(bpy.ops.object.light_add, type='POINT', location=location)
+        light.data.energy, light.data.shadow_soft_size = power, 0.0
+        light.data.use_temperature, light.data.temperature = True, kelvin
+    camera((0.0, -6.0, 3.5), (0.0, 0.0, 0.6))
+    return {"Floor": 1, "Grey": 2}
+
+
 # The scenes compared at a wider tolerance than 5% (their references are noisier: caustics).
 TOLERANCES = {"glass": 0.07}
 
@@ -334,7 +354,7 @@ TOLERANCES = {"glass": 0.07}
 PASSES = {"glass": 1024}
 
 # Regions whose colour (each channel's share of their sum) is compared, with its tolerance.
-COLOURS = {"glass": {"Tinted light": 0.03}}
+COLOURS = {"glass": {"Tinted light": 0.03}, "warm_light": {"Floor": 0.03, "Grey": 0.03}}
 
 SCENES = {"glass": glass, "principled_spheres": principled_spheres, "textured": textured, "normal_mapped": normal_mapped,
-          "coated": coated, "sheen": sheen, "leaf": leaf}
+          "coated": coated, "sheen": sheen, "leaf": leaf, "warm_light": warm_light}

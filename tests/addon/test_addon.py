@@ -329,6 +329,20 @@ class Export(unittest.TestCase):
                       warnings)
         self.assertFalse([w for w in warnings if "'Glass'" in w], warnings)
 
+    def test_a_light_with_a_colour_temperature_exports_and_keeps_it(self):
+        """Blender's glTF exporter raises on a light with a colour temperature; the add-on's export
+        succeeds, writes the temperature in the light's extras and leaves the light as it was."""
+        scene = glass_sphere_scene()
+        light = bpy.data.objects["Area"]
+        light.data.use_temperature, light.data.temperature = True, 3200.0
+        path = OUT / "temperature" / "scene.gltf"
+        path.parent.mkdir()
+        sys.modules["caustic.export"].export(scene, path)
+        nodes = {n["name"]: n.get("extras", {}).get("caustic") for n in json.loads(path.read_text())["nodes"]}
+        self.assertEqual(nodes["Area"]["temperature_k"], 3200.0)
+        self.assertTrue(light.data.use_temperature)
+        self.assertEqual(light.data.temperature, 3200.0)
+
 
 if __name__ == "__main__":
     unittest.main(verbosity=2)

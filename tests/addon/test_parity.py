@@ -107,6 +107,9 @@ class Parity(unittest.TestCase):
     def test_glass(self):
         self.check("glass")
 
+    def test_warm_light(self):
+        self.check("warm_light")
+
     def test_principled_spheres(self):
         self.check("principled_spheres")
 
