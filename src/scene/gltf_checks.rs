@@ -138,6 +138,7 @@ fn check_mesh_accessor_indices(root: &gltf::json::Root) -> Result<(), String> {
 /// climbs out of it, and URI schemes other than `data:`. A scene must not make the renderer read
 /// arbitrary files.
 pub fn check_references(document: &gltf::Document) -> Result<(), String> {
+    check_image_sources(document.as_json())?;
     let buffers = document.buffers().filter_map(|b| match b.source() {
         gltf::buffer::Source::Uri(uri) => Some((format!("buffer {}", b.index()), uri)),
         gltf::buffer::Source::Bin => None,
@@ -148,6 +149,20 @@ pub fn check_references(document: &gltf::Document) -> Result<(), String> {
     });
     for (what, uri) in buffers.chain(images) {
         check_relative(uri).map_err(|why| format!("{what} refers to '{uri}': {why}"))?;
+    }
+    Ok(())
+}
+
+/// Refuses images that say neither where their data is (a `uri` or a `bufferView`) nor, in a
+/// buffer view, what it holds (`mimeType`): the gltf crate's validation lets both through and
+/// panics reading them.
+fn check_image_sources(root: &gltf::json::Root) -> Result<(), String> {
+    for (i, image) in root.images.iter().enumerate() {
+        match (&image.buffer_view, &image.uri, &image.mime_type) {
+            (Some(_), _, None) => return Err(format!("image {i} is in a buffer view but has no mimeType")),
+            (None, None, _) => return Err(format!("image {i} has neither a uri nor a bufferView")),
+            _ => {}
+        }
     }
     Ok(())
 }
