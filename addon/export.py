@@ -1,6 +1,6 @@
 """The scene as glTF 2.0 through Blender's own exporter, plus what the exporter drops, written into
 the `caustic` extras (docs/extras.md) by the exporter's hooks while Caustic exports: area lights,
-the sun's angle, lights' colour temperature, the camera's depth of field, the shutter, the frame
+the sun's angle, point lights' radius, lights' colour temperature, the camera's depth of field, the shutter, the frame
 rate, the resolution (with its percentage), the active camera, the world's colour, dispersion and
 volume priorities; and a glass's volume absorption as `KHR_materials_volume` (`volume_absorption`).
 
@@ -88,8 +88,8 @@ def area_light_extras(light):
 
 
 def node_extras(blender_object):
-    """What the exporter drops from an object: area lights, the sun's angle, a light's colour
-    temperature, the lens."""
+    """What the exporter drops from an object: area lights, the sun's angle, a point light's
+    radius, a light's colour temperature, the lens."""
     if blender_object.type == 'LIGHT':
         light = blender_object.data
         extras = {}
@@ -97,6 +97,8 @@ def node_extras(blender_object):
             extras["area_light"] = area_light_extras(light)
         if light.type == 'SUN':
             extras["sun_angle_deg"] = math.degrees(light.angle)
+        if light.type == 'POINT' and light.shadow_soft_size > 0:
+            extras["radius"] = light.shadow_soft_size
         if light.name in _temperatures:
             extras["temperature_k"] = _temperatures[light.name]
         return extras or None
@@ -272,8 +274,11 @@ def scene_warnings(depsgraph):
                  for slot in obj.material_slots if slot.material is not None}
     warnings = [w for m in sorted(materials, key=lambda m: m.name) for w in material_warnings(m)]
     for light in {obj.data for obj in depsgraph.scene.objects if obj.type == 'LIGHT'}:
-        if light.type in ('POINT', 'SPOT') and light.shadow_soft_size > 0:
-            warnings.append(f"light '{light.name}': the radius is not exported; it renders as a point")
+        if light.type == 'SPOT' and light.shadow_soft_size > 0:
+            warnings.append(f"light '{light.name}': a spot light's radius is not rendered; it renders as a point")
+        if light.type == 'POINT' and light.shadow_soft_size > 0 and getattr(light, "use_soft_falloff", False):
+            warnings.append(f"light '{light.name}': Soft Falloff is not rendered: the light is a sphere, which lights "
+                            "surfaces within a few radii of it more than Blender's falloff does")
     return warnings
 
 

@@ -39,6 +39,31 @@ fn point_light_intensity_is_candela_over_683() {
     assert_near(mean_luminance(&gltf.write(dir.path(), "point"), dir.path()), 1.0, "point light");
 }
 
+/// The same point light with a radius of 0.3 (a sphere of light, Blender's radius in the
+/// extras) emits the same power: the ground under it receives the same irradiance (a sphere
+/// wholly above a point lights it as its centre would), and the camera sees the sphere's
+/// radiance I / (pi r^2) where it looks at it.
+#[test]
+fn a_point_light_with_a_radius_is_a_sphere_of_the_same_power() {
+    let dir = tempfile::tempdir().unwrap();
+    let light = json!({"type": "point", "intensity": 4.0 * PI * 683.0, "color": [1.0, 1.0, 1.0]});
+    let mut doc = ground_scene(|g| g.light(light, [0.0, 2.0, 0.0], [0.0, -1.0, 0.0])).to_json();
+    let nodes = doc["nodes"].as_array_mut().unwrap();
+    let node = nodes.iter_mut().find(|n| n.get("extensions").is_some()).unwrap();
+    node["extras"] = json!({"caustic": {"radius": 0.3}});
+    let path = dir.path().join("sphere.gltf");
+    std::fs::write(&path, doc.to_string()).unwrap();
+    assert_near(mean_luminance(&path, dir.path()), 1.0, "under a sphere light");
+    // Seen from below, straight up into it: radiance 4 pi / (pi 0.3^2) over its (tessellated) disc.
+    doc["nodes"].as_array_mut().unwrap().iter_mut().filter(|n| n.get("camera").is_some()).for_each(|n| {
+        n["rotation"] = json!([std::f32::consts::FRAC_1_SQRT_2, 0.0, 0.0, std::f32::consts::FRAC_1_SQRT_2]);
+    });
+    std::fs::write(&path, doc.to_string()).unwrap();
+    let expected = 4.0 / (0.3f64 * 0.3);
+    let seen = mean_luminance(&path, dir.path());
+    assert!((seen / expected - 1.0).abs() < 0.02, "the sphere's radiance: {seen} vs {expected}");
+}
+
 /// A spot light of the same intensity pointing down lights the ground under it the same, and
 /// nothing outside its outer cone.
 #[test]

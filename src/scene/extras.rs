@@ -97,6 +97,8 @@ pub struct NodeExtras {
     pub area_light: Option<AreaLightExtras>,
     /// The angular diameter of the node's sun light, in degrees (soft shadows).
     pub sun_angle_deg: Option<f32>,
+    /// The radius of the node's point light (Blender's): it becomes an emitting sphere.
+    pub radius: Option<f32>,
     /// The colour temperature of the node's light, kelvin (Blender's `use_temperature`): its
     /// colour is multiplied by a black body's.
     pub temperature_k: Option<f32>,

@@ -275,7 +275,18 @@ impl Builder<'_> {
         }
         let tint = light_tint(&extras, name)?;
         if let Some(light) = node.light() {
-            self.add_punctual_light(&light, node.index(), &extras, tint);
+            match (light.kind(), extras.radius) {
+                (_, Some(radius)) if !(radius >= 0.0 && radius.is_finite()) => {
+                    return Err(format!(
+                        "node '{name}' extras `caustic.radius`: expected a light radius of 0 or more, got {radius}"
+                    ));
+                }
+                (Kind::Point, Some(radius)) if radius > 0.0 => {
+                    let intensity = Vec3::from(light.color()) * tint * light.intensity() / LUMENS_PER_WATT;
+                    self.add_sphere_light(intensity, radius, node.index(), name, rig);
+                }
+                _ => self.add_punctual_light(&light, node.index(), &extras, tint),
+            }
         }
         if let Some(area) = &extras.area_light {
             self.add_area_light(area, node.index(), name, rig, tint)?;
@@ -377,9 +388,42 @@ impl Builder<'_> {
             .sum();
         let radiance = Vec3::from(area.color) * tint * area.power
             / (std::f32::consts::PI * area_m2.max(f32::MIN_POSITIVE));
+        let normals = vec![-Vec3::Z; 3 * local.len()];
+        self.add_light_mesh(node, format!("area light '{name}'"), &local, normals, radiance);
+        Ok(())
+    }
+
+    /// A point light of `radius` (Blender's, from the extras) becomes an emitting sphere, as Cycles
+    /// renders it: radiance `4 I / A` from its outer faces of area A, so that it emits the power
+    /// `4 pi I` of the point light of intensity I (W/sr) it replaces, passed through like an area
+    /// light.
+    fn add_sphere_light(&mut self, intensity: Vec3, radius: f32, node: usize, name: &str, rig: &Rig) {
+        let local = shapes::sphere_triangles(radius);
+        let world = rig.world(node, 0.0);
+        let area_m2: f32 = local
+            .iter()
+            .map(|t| t.map(|v| world.transform_point3(v)))
+            .map(|[a, b, c]| (b - a).cross(c - a).length() / 2.0)
+            .sum();
+        let radiance = intensity * 4.0 / area_m2.max(f32::MIN_POSITIVE);
+        let normals = local.iter().flatten().map(|p| p.normalize_or_zero()).collect();
+        self.add_light_mesh(node, format!("sphere light '{name}'"), &local, normals, radiance);
+    }
+
+    /// An emitter of `radiance` from the front faces of `local` triangles on `node` (with
+    /// `normals` at their corners), which every ray passes through unchanged (a thin wall of
+    /// index 1), as Blender's lights do: they cast no shadow and hide nothing behind them.
+    fn add_light_mesh(
+        &mut self,
+        node: usize,
+        name: String,
+        local: &[[Vec3; 3]],
+        normals: Vec<Vec3>,
+        radiance: Vec3,
+    ) {
         let material = self.materials.len() as u32;
         self.materials.push(Material {
-            name: format!("area light '{name}'"),
+            name: name.clone(),
             base_colour: BaseColour::Constant(RgbSpectrum::constant(0.0)),
             emission: Some(RgbSpectrum::illuminant(radiance)),
             emits_both_sides: false,
@@ -394,14 +438,13 @@ impl Builder<'_> {
             .collect();
         self.meshes.push(MeshInstance {
             node,
-            name: format!("area light '{name}'"),
-            normals: vec![-Vec3::Z; positions.len()],
+            name,
+            normals,
             uvs: vec![Vec2::ZERO; positions.len()],
             extras: Default::default(),
             positions,
             triangles,
         });
-        Ok(())
     }
 
     fn add_mesh(&mut self, mesh: &gltf::Mesh, node: usize) -> Result<(), String> {

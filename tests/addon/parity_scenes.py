@@ -5,8 +5,9 @@ tests/references/parity/). Every object gets a pass index, so that Cycles' objec
 gives each object's pixels.
 
 Each scene function clears the file, builds the scene at 64x64 and returns the names of the
-objects whose mean radiance is compared, with their pass indices, or of floor regions (a caustic)
-with a function that gives their pixels from the object-index image.
+objects whose mean radiance is compared, with their pass indices, or of floor regions (a caustic,
+a penumbra) with a function that gives their pixels from the object-index image and Cycles'
+reference image.
 """
 import math
 
@@ -291,7 +292,7 @@ def floor_disc(centre, radius, floor_index=1):
             if 0 <= x < 1 and 0 <= y < 1:
                 pixels.add((int((1 - y) * SIZE), int(x * SIZE)))
 
-    def mask(index):
+    def mask(index, reference):
         disc = np.zeros(index.shape, bool)
         for row, column in pixels:
             disc[row, column] = True
@@ -346,6 +347,34 @@ def warm_light():
     return {"Floor": 1, "Grey": 2}
 
 
+def penumbra(index, reference, floor_index=1):
+    """The floor's pixels (rim left out) that Cycles shows between 20% and 80% of the lit floor's
+    luminance (its brightest tenth): the penumbra as Cycles renders it."""
+    floor = interior(index, floor_index)
+    luminance = reference @ np.array([0.2126, 0.7152, 0.0722])
+    lit = np.percentile(luminance[floor], 90)
+    return floor & (luminance > 0.2 * lit) & (luminance < 0.8 * lit)
+
+
+def soft_light():
+    """A cube on the floor under a point light of radius 0.4 (a sphere light, without Blender's
+    Soft Falloff): a wide penumbra."""
+    clear()
+    add(bpy.ops.mesh.primitive_plane_add, principled("Floor", Base_Color=(0.8, 0.8, 0.8, 1.0), Roughness=1.0,
+                                                     Specular_IOR_Level=0.0), index=1, size=20)
+    add(bpy.ops.mesh.primitive_cube_add, principled("Block", Base_Color=(0.6, 0.3, 0.2, 1.0), Roughness=1.0,
+                                                    Specular_IOR_Level=0.0), index=2, size=1.0, location=(0, 0, 0.5))
+    world((0.01, 0.01, 0.01))
+    light = add(bpy.ops.object.light_add, type='POINT', location=(1.2, -0.4, 2.0))
+    light.data.energy, light.data.shadow_soft_size = 500.0, 0.4
+    # A sphere of light: Blender's default Soft Falloff dims what lies near it (`I / (d^2 + r^2)`,
+    # a disc facing each point, as lights were before Blender 4.0), which Caustic does not do.
+    light.data.use_soft_falloff = False
+    light.visible_camera = True  # Caustic shows lights to the camera; Cycles only when told
+    camera((0.0, -5.5, 4.5), (0.0, 0.3, 0.2))
+    return {"Floor": 1, "Block": 2, "Penumbra": penumbra}
+
+
 # The scenes compared at a wider tolerance than 5% (their references are noisier: caustics).
 TOLERANCES = {"glass": 0.07}
 
@@ -357,4 +386,4 @@ PASSES = {"glass": 1024}
 COLOURS = {"glass": {"Tinted light": 0.03}, "warm_light": {"Floor": 0.03, "Grey": 0.03}}
 
 SCENES = {"glass": glass, "principled_spheres": principled_spheres, "textured": textured, "normal_mapped": normal_mapped,
-          "coated": coated, "sheen": sheen, "leaf": leaf, "warm_light": warm_light}
+          "coated": coated, "sheen": sheen, "leaf": leaf, "warm_light": warm_light, "soft_light": soft_light}

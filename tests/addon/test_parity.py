@@ -86,7 +86,7 @@ class Parity(unittest.TestCase):
         sheet = save_sheet(name, image, reference)
         failures = []
         for obj, value in objects.items():
-            mask = value(index) if callable(value) else parity_scenes.interior(index, value)
+            mask = value(index, reference) if callable(value) else parity_scenes.interior(index, value)
             self.assertGreater(mask.sum(), 20, f"{name}: '{obj}' covers too few pixels")
             ours, theirs = image[mask].mean(axis=0), reference[mask].mean(axis=0)
             ratio = ours / np.maximum(theirs, 1e-6)
@@ -106,6 +106,9 @@ class Parity(unittest.TestCase):
 
     def test_glass(self):
         self.check("glass")
+
+    def test_soft_light(self):
+        self.check("soft_light")
 
     def test_warm_light(self):
         self.check("warm_light")
