@@ -242,6 +242,18 @@ fn world(w: &extras::WorldExtras, gltf_path: &Path) -> Result<World, String> {
     }
 }
 
+/// The area of `local` triangles on `node` at the scene's rest pose (at least the smallest
+/// positive number, to divide by).
+fn world_area(local: &[[Vec3; 3]], rig: &Rig, node: usize) -> f32 {
+    let world = rig.world(node, 0.0);
+    let area: f32 = local
+        .iter()
+        .map(|t| t.map(|v| world.transform_point3(v)))
+        .map(|[a, b, c]| (b - a).cross(c - a).length() / 2.0)
+        .sum();
+    area.max(f32::MIN_POSITIVE)
+}
+
 /// The factor on a light's colour from the node's extras: a black body's colour at its colour
 /// temperature (luminance 1), or 1.
 fn light_tint(extras: &NodeExtras, name: &str) -> Result<Vec3, String> {
@@ -380,14 +392,8 @@ impl Builder<'_> {
             return Err(format!("node '{name}' area light: size must be positive and power non-negative"));
         }
         let local = shapes::area_light_triangles(area);
-        let world = rig.world(node, 0.0);
-        let area_m2: f32 = local
-            .iter()
-            .map(|t| t.map(|v| world.transform_point3(v)))
-            .map(|[a, b, c]| (b - a).cross(c - a).length() / 2.0)
-            .sum();
-        let radiance = Vec3::from(area.color) * tint * area.power
-            / (std::f32::consts::PI * area_m2.max(f32::MIN_POSITIVE));
+        let area_m2 = world_area(&local, rig, node);
+        let radiance = Vec3::from(area.color) * tint * area.power / (std::f32::consts::PI * area_m2);
         let normals = vec![-Vec3::Z; 3 * local.len()];
         self.add_light_mesh(node, format!("area light '{name}'"), &local, normals, radiance);
         Ok(())
@@ -399,13 +405,8 @@ impl Builder<'_> {
     /// light.
     fn add_sphere_light(&mut self, intensity: Vec3, radius: f32, node: usize, name: &str, rig: &Rig) {
         let local = shapes::sphere_triangles(radius);
-        let world = rig.world(node, 0.0);
-        let area_m2: f32 = local
-            .iter()
-            .map(|t| t.map(|v| world.transform_point3(v)))
-            .map(|[a, b, c]| (b - a).cross(c - a).length() / 2.0)
-            .sum();
-        let radiance = intensity * 4.0 / area_m2.max(f32::MIN_POSITIVE);
+        let area_m2 = world_area(&local, rig, node);
+        let radiance = intensity * 4.0 / area_m2;
         let normals = local.iter().flatten().map(|p| p.normalize_or_zero()).collect();
         self.add_light_mesh(node, format!("sphere light '{name}'"), &local, normals, radiance);
     }
