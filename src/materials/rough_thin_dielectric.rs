@@ -100,13 +100,14 @@ impl RoughThinDielectric {
         }
         let wall = ThinWall::at(self.ior, self.depth, wo_local.dot(h));
         let g = masking_shadowing(self.alpha, wo_local, side) / masking(self.alpha, wo_local);
-        let (wi, weight) = if u_lobe < wall.p_reflect {
-            (side, wall.reflected / wall.p_reflect)
+        let (wi, weight, p_lobe) = if u_lobe < wall.p_reflect {
+            (side, wall.reflected / wall.p_reflect, wall.p_reflect)
         } else {
-            (mirrored(side), wall.through * self.tint / (1.0 - wall.p_reflect))
+            (mirrored(side), wall.through * self.tint / (1.0 - wall.p_reflect), 1.0 - wall.p_reflect)
         };
         let world = (t * wi.x + b * wi.y + n * wi.z).normalize();
         let weight = weight * (g * self.compensation(frame, wo));
-        Some(BsdfSample { wi: world, weight, pdf: self.pdf(frame, wo, world), is_delta: false })
+        let pdf = microfacet::reflection_pdf(self.alpha, wo_local, side) * p_lobe;
+        Some(BsdfSample { wi: world, weight, pdf, is_delta: false })
     }
 }
