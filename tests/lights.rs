@@ -42,7 +42,7 @@ fn point_light_intensity_is_candela_over_683() {
 /// The same point light with a radius of 0.3 (a sphere of light, Blender's radius in the
 /// extras) emits the same power: the ground under it receives the same irradiance (a sphere
 /// wholly above a point lights it as its centre would), and the camera sees the sphere's
-/// radiance I / (pi r^2) where it looks at it.
+/// radiance I / (pi r^2) where it looks at it. A spot light's radius is named in a warning.
 #[test]
 fn a_point_light_with_a_radius_is_a_sphere_of_the_same_power() {
     let dir = tempfile::tempdir().unwrap();
@@ -62,6 +62,15 @@ fn a_point_light_with_a_radius_is_a_sphere_of_the_same_power() {
     let expected = 4.0 / (0.3f64 * 0.3);
     let seen = mean_luminance(&path, dir.path());
     assert!((seen / expected - 1.0).abs() < 0.02, "the sphere's radiance: {seen} vs {expected}");
+    // A spot light's radius is not rendered, and says so.
+    let spot = json!({"type": "spot", "intensity": 683.0, "spot": {"outerConeAngle": 0.4}});
+    let mut doc = ground_scene(|g| g.light(spot, [0.0, 2.0, 0.0], [0.0, -1.0, 0.0])).to_json();
+    let nodes = doc["nodes"].as_array_mut().unwrap();
+    nodes.iter_mut().find(|n| n.get("extensions").is_some()).unwrap()["extras"] =
+        json!({"caustic": {"radius": 0.3}});
+    std::fs::write(&path, doc.to_string()).unwrap();
+    let warnings = caustic::scene::Description::load(&path).unwrap().warnings;
+    assert!(warnings.iter().any(|w| w.contains("radius is rendered for point lights only")), "{warnings:?}");
 }
 
 /// A spot light of the same intensity pointing down lights the ground under it the same, and

@@ -297,6 +297,12 @@ impl Builder<'_> {
                     let intensity = Vec3::from(light.color()) * tint * light.intensity() / LUMENS_PER_WATT;
                     self.add_sphere_light(intensity, radius, node.index(), name, rig);
                 }
+                (_, Some(radius)) if radius > 0.0 => {
+                    self.warnings.push(format!(
+                        "node '{name}': a radius is rendered for point lights only; this light renders as a point"
+                    ));
+                    self.add_punctual_light(&light, node.index(), &extras, tint);
+                }
                 _ => self.add_punctual_light(&light, node.index(), &extras, tint),
             }
         }
