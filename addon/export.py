@@ -1,8 +1,9 @@
 """The scene as glTF 2.0 through Blender's own exporter, plus what the exporter drops, written into
 the `caustic` extras (docs/extras.md) by the exporter's hooks while Caustic exports: area lights,
 the sun's angle, point lights' radius, lights' colour temperature, the camera's depth of field, the shutter, the frame
-rate, the resolution (with its percentage), the active camera, the world's colour, dispersion and
-volume priorities; and a glass's volume absorption as `KHR_materials_volume` (`volume_absorption`).
+rate, the resolution (with its percentage), the active camera, the world (its colour, or an
+Environment Texture's image written beside the scene as a linear EXR), dispersion and volume
+priorities; and a glass's volume absorption as `KHR_materials_volume` (`volume_absorption`).
 
 The hooks change nothing in the user's data: they add extras to what is being written, and
 complete two values of the layers the exporter leaves out (`complete_layers`). Lights with a colour
@@ -19,6 +20,10 @@ from bpy.props import StringProperty
 # True only while Caustic exports: the hooks stay out of the user's own glTF exports.
 _exporting = False
 
+# While Caustic exports, the world's extras (an environment image is written before the exporter
+# runs, so that an image that cannot be read stops the export with its name).
+_world = None
+
 # While Caustic exports, the colour temperature (kelvin) of each light that uses one, by name:
 # Blender's exporter raises a TypeError on a light with `use_temperature`, so it is switched off
 # for the export and the temperature travels in the extras (the renderer multiplies the colour
@@ -33,28 +38,144 @@ def resolution(scene):
     return [max(1, round(r.resolution_x * scale)), max(1, round(r.resolution_y * scale))]
 
 
-def world_extras(world):
-    """A uniform world: the Background node's colour and strength (or the world's colour)."""
+def linked_node(socket):
+    """The node linked into `socket` (through reroutes), or None."""
+    while socket.is_linked:
+        node = socket.links[0].from_node
+        if node.type != 'REROUTE':
+            return node
+        socket = node.inputs[0]
+    return None
+
+
+def world_nodes(world):
+    """The nodes Caustic renders of `world`'s node tree: its Background, the Environment Texture
+    feeding the Background's Color (or None) and the Mapping node turning it (or None), with what
+    it cannot render as sentences."""
+    tree = world.node_tree if world is not None else None
+    if tree is None:
+        return None, None, None, []
+    name = f"world '{world.name}'"
+    output = next((n for n in tree.nodes if n.type == 'OUTPUT_WORLD' and n.is_active_output), None)
+    surface = linked_node(output.inputs["Surface"]) if output is not None else None
+    if surface is None:
+        return None, None, None, []
+    background = surface
+    warnings = []
+    if surface.type != 'BACKGROUND':
+        background = next((n for n in tree.nodes if n.type == 'BACKGROUND'), None)
+        instead = f"the Background '{background.name}' is rendered" if background else "the world is black"
+        warnings.append(f"{name}: its {surface.name} node is not rendered; {instead}")
+        if background is None:
+            return None, None, None, warnings
+    if background.inputs["Strength"].is_linked:
+        warnings.append(f"{name}: the Background's Strength is linked; its unlinked value is rendered")
+    colour = linked_node(background.inputs["Color"])
+    if colour is None:
+        return background, None, None, warnings
+    if colour.type != 'TEX_ENVIRONMENT':
+        warnings.append(f"{name}: the Background's Color comes from {colour.name}, which is not rendered "
+                        "(an Environment Texture is); its unlinked colour is rendered")
+        return background, None, None, warnings
+    if colour.projection != 'EQUIRECTANGULAR':
+        warnings.append(f"{name}: the Environment Texture's {colour.projection} projection is rendered as "
+                        "equirectangular")
+    mapping = linked_node(colour.inputs["Vector"])
+    if mapping is not None and mapping.type != 'MAPPING':
+        warnings.append(f"{name}: the Environment Texture's Vector comes from {mapping.name}, which is not "
+                        "rendered (a Mapping node's rotation about Z is)")
+        mapping = None
+    if mapping is not None:
+        warnings += mapping_warnings(mapping, name)
+    return background, colour, mapping, warnings
+
+
+def mapping_warnings(mapping, name):
+    """What of a world's Mapping node Caustic does not render (all but a rotation about Z)."""
+    inputs = mapping.inputs
+    warnings = [f"{name}: the Mapping node's {socket.name} is linked; its unlinked value is rendered"
+                for socket in inputs if socket.is_linked and socket.name != "Vector"]
+    rotation = inputs["Rotation"].default_value
+    if abs(rotation[0]) > 1e-6 or abs(rotation[1]) > 1e-6:
+        warnings.append(f"{name}: the Mapping node's rotation about X and Y is not rendered (about Z is)")
+    if mapping.vector_type in ('POINT', 'TEXTURE') and any(abs(c) > 1e-6 for c in inputs["Location"].default_value):
+        warnings.append(f"{name}: the Mapping node's Location is not rendered")
+    if "Scale" in inputs and any(abs(c - 1.0) > 1e-6 for c in inputs["Scale"].default_value):
+        warnings.append(f"{name}: the Mapping node's Scale is not rendered")
+    return warnings
+
+
+def environment_rotation_deg(mapping):
+    """The turn about the up axis of the environment a Mapping node gives (Caustic's
+    `rotation_deg`): a Point, Vector or Normal mapping rotates the direction looked up, which turns
+    the image the other way; a Texture mapping rotates by the inverse."""
+    if mapping is None:
+        return 0.0
+    turn = math.degrees(mapping.inputs["Rotation"].default_value[2])
+    return turn if mapping.vector_type == 'TEXTURE' else -turn
+
+
+def srgb_to_linear(values):
+    """The sRGB transfer function undone (values in [0, 1])."""
+    import numpy as np
+    return np.where(values <= 0.04045, values / 12.92, np.power((values + 0.055) / 1.055, 2.4))
+
+
+def write_environment(image, folder):
+    """Writes `image` (any format Blender loads, packed or on disk) into `folder` as a linear
+    OpenEXR and returns its file name. Float images are linear already in Blender; 8-bit ones in
+    sRGB are decoded. Saved through a Non-Color image: Blender converts a Linear Rec.709 image's
+    pixels to display sRGB when it saves them as EXR."""
+    import numpy as np
+    where = f"'{image.name}' ({bpy.path.abspath(image.filepath) or 'packed'})"
+    width, height = image.size
+    if width == 0 or height == 0 or not image.has_data:
+        raise RuntimeError(f"the world's environment image {where} cannot be read")
+    pixels = np.empty(width * height * 4, np.float32)
+    image.pixels.foreach_get(pixels)
+    pixels = pixels.reshape(-1, 4)
+    if not image.is_float and image.colorspace_settings.name == 'sRGB':
+        pixels[:, :3] = srgb_to_linear(pixels[:, :3])
+    copy = bpy.data.images.new("caustic-environment", width, height, alpha=False, float_buffer=True)
+    try:
+        copy.colorspace_settings.name = 'Non-Color'
+        copy.pixels.foreach_set(pixels.ravel())
+        copy.filepath_raw = str(folder / "environment.exr")
+        copy.file_format = 'OPEN_EXR'
+        copy.save()
+    finally:
+        bpy.data.images.remove(copy)
+    return "environment.exr"
+
+
+def world_extras(world, folder):
+    """The world: an environment image (written into `folder`) with its rotation and the
+    Background's strength, or the Background's colour and strength (or the world's colour)."""
     if world is None:
         return None
-    if world.node_tree is not None:
-        background = next((n for n in world.node_tree.nodes if n.type == 'BACKGROUND'), None)
-        if background is not None:
-            colour = background.inputs["Color"].default_value
-            strength = background.inputs["Strength"].default_value
-            return {"color": [colour[0], colour[1], colour[2]], "strength": strength}
-    return {"color": list(world.color), "strength": 1.0}
+    if world.node_tree is None:
+        return {"color": list(world.color), "strength": 1.0}
+    background, environment, mapping, _ = world_nodes(world)
+    if background is None:
+        return {"color": [0.0, 0.0, 0.0], "strength": 1.0}
+    strength = background.inputs["Strength"].default_value
+    if environment is None:
+        colour = background.inputs["Color"].default_value
+        return {"color": [colour[0], colour[1], colour[2]], "strength": strength}
+    if environment.image is None:
+        raise RuntimeError(f"the world's Environment Texture '{environment.name}' has no image")
+    return {"image": write_environment(environment.image, folder), "strength": strength,
+            "rotation_deg": environment_rotation_deg(mapping)}
 
 
-def scene_extras(scene):
-    """The scene's `caustic` extras."""
+def scene_extras(scene, world):
+    """The scene's `caustic` extras, with the world's (`world_extras`)."""
     r = scene.render
     extras = {"resolution": resolution(scene), "fps": r.fps / r.fps_base}
     if scene.camera is not None:
         extras["camera"] = scene.camera.name
     if r.use_motion_blur:
         extras["shutter"] = {"length_frames": r.motion_blur_shutter, "position": r.motion_blur_position}
-    world = world_extras(scene.world)
     if world is not None:
         extras["world"] = world
     return extras
@@ -133,7 +254,7 @@ class glTF2ExportUserExtension:
 
     def gather_scene_hook(self, gltf_scene, blender_scene, export_settings):
         if _exporting:
-            add_extras(gltf_scene, scene_extras(blender_scene))
+            add_extras(gltf_scene, scene_extras(blender_scene, _world))
 
     def gather_node_hook(self, gltf_node, blender_object, export_settings):
         if _exporting:
@@ -273,6 +394,7 @@ def scene_warnings(depsgraph):
     materials = {slot.material for obj in depsgraph.scene.objects if obj.type == 'MESH'
                  for slot in obj.material_slots if slot.material is not None}
     warnings = [w for m in sorted(materials, key=lambda m: m.name) for w in material_warnings(m)]
+    warnings += world_nodes(depsgraph.scene.world)[3]
     for light in {obj.data for obj in depsgraph.scene.objects if obj.type == 'LIGHT'}:
         if light.type == 'SPOT' and light.shadow_soft_size > 0:
             warnings.append(f"light '{light.name}': a spot light's radius is not rendered; it renders as a point")
@@ -285,8 +407,9 @@ def scene_warnings(depsgraph):
 def export(scene, path):
     """Writes `scene` with its animation to `path` (.gltf) with Caustic's extras; returns the
     seconds it took."""
-    global _exporting
+    global _exporting, _world
     start = time.perf_counter()
+    _world = world_extras(scene.world, pathlib.Path(path).parent)
     # One timeline sampled once a frame (LINEAR keys); no KHR_animation_pointer (the renderer
     # cannot read it).
     options = dict(filepath=str(path), export_format='GLTF_SEPARATE', export_cameras=True, export_lights=True,
@@ -305,7 +428,7 @@ def export(scene, path):
         for light in warm:
             light.use_temperature = True
         _temperatures.clear()
-        _exporting = False
+        _exporting, _world = False, None
     if result != {'FINISHED'}:
         raise RuntimeError(f"Blender's glTF exporter did not finish ({result})")
     return time.perf_counter() - start

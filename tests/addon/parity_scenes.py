@@ -10,6 +10,7 @@ a penumbra) with a function that gives their pixels from the object-index image 
 reference image.
 """
 import math
+import tempfile
 
 import bpy
 import mathutils
@@ -375,6 +376,58 @@ def soft_light():
     return {"Floor": 1, "Block": 2, "Penumbra": penumbra}
 
 
+def sky_image(width=256, height=128, sun=(0.0833, 15.0)):
+    """An equirectangular sky as a float image saved as Radiance HDR and loaded from disk, as an
+    artist's HDRI is: blue overhead, pale at the horizon, brown ground, and a sun of 2 x 2 texels
+    at image column `sun[0]` (0 to 1) and elevation `sun[1]` degrees."""
+    rows = (np.arange(height) + 0.5) / height  # 0 at the bottom
+    elevation = (rows - 0.5) * 180.0
+    t = np.clip(elevation / 60.0, 0.0, 1.0)[:, None]
+    sky = (1 - t) * np.array([0.7, 0.75, 0.8]) + t * np.array([0.15, 0.3, 0.8])
+    rgb = np.where((elevation < 0)[:, None], np.array([0.15, 0.1, 0.07]), sky)
+    pixels = np.repeat(rgb[:, None, :], width, axis=1)
+    row = int((sun[1] + 90.0) / 180.0 * height)
+    column = int(sun[0] * width)
+    pixels[row:row + 2, column:column + 2] = 20000.0
+    rgba = np.concatenate([pixels, np.ones((height, width, 1))], axis=2).astype(np.float32)
+    img = bpy.data.images.new("sky", width, height, alpha=False, float_buffer=True)
+    img.pixels.foreach_set(rgba.ravel())
+    img.filepath_raw = str(tempfile.mkdtemp(prefix="caustic-sky-")) + "/sky.hdr"
+    img.file_format = 'HDR'
+    img.save()
+    return bpy.data.images.load(img.filepath_raw)
+
+
+def hdri():
+    """A grey ball and a mirror ball on a floor lit only by an HDRI (an Environment Texture
+    through a Mapping node turned 60 degrees about Z, Background strength 0.8), whose sun shows
+    in the sky behind the balls and casts their shadows toward the camera."""
+    clear()
+    w = bpy.data.worlds.new("World")
+    w.use_nodes = True
+    nodes, links = w.node_tree.nodes, w.node_tree.links
+    environment = nodes.new("ShaderNodeTexEnvironment")
+    environment.image = sky_image()
+    mapping = nodes.new("ShaderNodeMapping")
+    mapping.inputs["Rotation"].default_value = (0.0, 0.0, math.radians(60))
+    coords = nodes.new("ShaderNodeTexCoord")
+    links.new(coords.outputs["Generated"], mapping.inputs["Vector"])
+    links.new(mapping.outputs["Vector"], environment.inputs["Vector"])
+    links.new(environment.outputs["Color"], nodes["Background"].inputs["Color"])
+    nodes["Background"].inputs["Strength"].default_value = 0.8
+    bpy.context.scene.world = w
+    add(bpy.ops.mesh.primitive_plane_add, principled("Floor", Base_Color=(0.5, 0.5, 0.5, 1.0)), index=1, size=20)
+    add(bpy.ops.mesh.primitive_uv_sphere_add, principled("Grey", Base_Color=(0.6, 0.6, 0.6, 1.0), Roughness=0.5),
+        index=2, segments=64, ring_count=32, radius=0.8, location=(-1.0, 0.0, 0.8))
+    bpy.ops.object.shade_smooth()
+    add(bpy.ops.mesh.primitive_uv_sphere_add, principled("Mirror", Base_Color=(0.9, 0.9, 0.9, 1.0), Metallic=1.0,
+                                                         Roughness=0.0),
+        index=3, segments=64, ring_count=32, radius=0.6, location=(1.0, -0.5, 0.6))
+    bpy.ops.object.shade_smooth()
+    camera((0.0, -7.0, 1.5), (0.0, 0.0, 2.0))
+    return {"Floor": 1, "Grey": 2, "Mirror": 3, "Sky": 0, "Shadow": floor_disc((-1.0, -1.6), 0.3)}
+
+
 # The scenes compared at a wider tolerance than 5% (their references are noisier: caustics).
 TOLERANCES = {"glass": 0.07}
 
@@ -382,8 +435,12 @@ TOLERANCES = {"glass": 0.07}
 # kernel blur (the radius sequence's bias) takes its peak 7% down at 256 passes, 1.5% at 2048.
 PASSES = {"glass": 1024}
 
+# Regions whose brightest pixel lands where Cycles' does, within this many pixels.
+PEAKS = {"hdri": {"Sky": 2.0}}
+
 # Regions whose colour (each channel's share of their sum) is compared, with its tolerance.
 COLOURS = {"glass": {"Tinted light": 0.03}, "warm_light": {"Floor": 0.03, "Grey": 0.03}}
 
 SCENES = {"glass": glass, "principled_spheres": principled_spheres, "textured": textured, "normal_mapped": normal_mapped,
-          "coated": coated, "sheen": sheen, "leaf": leaf, "warm_light": warm_light, "soft_light": soft_light}
+          "coated": coated, "sheen": sheen, "leaf": leaf, "warm_light": warm_light, "soft_light": soft_light,
+          "hdri": hdri}

@@ -7,6 +7,7 @@ with `bpy.ops.render.render()`, then reads the pixels Blender saved.
 """
 
 import json
+import math
 import os
 import pathlib
 import subprocess
@@ -342,6 +343,70 @@ class Export(unittest.TestCase):
         self.assertEqual(nodes["Area"]["temperature_k"], 3200.0)
         self.assertTrue(light.data.use_temperature)
         self.assertEqual(light.data.temperature, 3200.0)
+
+
+def environment_world(img, rotation_deg=0.0, vector_type='POINT'):
+    """A world whose Background (strength 2) shows `img` through a Mapping node turned about Z."""
+    world = bpy.data.worlds.new("Sky")
+    nodes, links = world.node_tree.nodes, world.node_tree.links
+    environment = nodes.new("ShaderNodeTexEnvironment")
+    environment.image = img
+    mapping = nodes.new("ShaderNodeMapping")
+    mapping.vector_type = vector_type
+    mapping.inputs["Rotation"].default_value = (0.0, 0.0, math.radians(rotation_deg))
+    links.new(nodes.new("ShaderNodeTexCoord").outputs["Generated"], mapping.inputs["Vector"])
+    links.new(mapping.outputs["Vector"], environment.inputs["Vector"])
+    links.new(environment.outputs["Color"], nodes["Background"].inputs["Color"])
+    nodes["Background"].inputs["Strength"].default_value = 2.0
+    bpy.context.scene.world = world
+    return world
+
+
+class World(unittest.TestCase):
+    def test_an_environment_texture_travels_as_a_linear_exr_beside_the_scene(self):
+        """A packed 8-bit sRGB image becomes a linear EXR in the export folder, with the Background's
+        strength and the Mapping node's turn (the other way for a Point mapping)."""
+        scene = glass_sphere_scene()
+        values = np.array([[25, 128, 230, 255], [77, 51, 179, 255], [255, 0, 64, 255], [153, 153, 153, 255]]) / 255
+        img = bpy.data.images.new("packed-sky", 2, 2, alpha=True)
+        img.pixels.foreach_set(values.astype(np.float32).ravel())
+        img.pack()
+        environment_world(img, rotation_deg=30.0, vector_type='TEXTURE')
+        path = OUT / "environment" / "scene.gltf"
+        path.parent.mkdir()
+        sys.modules["caustic.export"].export(scene, path)
+        world = json.loads(path.read_text())["scenes"][0]["extras"]["caustic"]["world"]
+        self.assertEqual(world["image"], "environment.exr")
+        np.testing.assert_allclose([world["strength"], world["rotation_deg"]], [2.0, 30.0], rtol=1e-6)
+        written = OpenEXR.File(str(path.parent / world["image"])).channels()
+        pixels = next(iter(written.values())).pixels[::-1].reshape(-1, 3)  # bottom row first, as Blender's
+        srgb = values[:, :3]
+        linear = np.where(srgb <= 0.04045, srgb / 12.92, ((srgb + 0.055) / 1.055) ** 2.4)
+        np.testing.assert_allclose(pixels, linear, rtol=1e-5)
+        environment_world(img, rotation_deg=30.0, vector_type='POINT')
+        sys.modules["caustic.export"].export(scene, path)
+        world = json.loads(path.read_text())["scenes"][0]["extras"]["caustic"]["world"]
+        self.assertAlmostEqual(world["rotation_deg"], -30.0, places=4)
+
+    def test_an_environment_image_that_cannot_be_read_fails_the_render_naming_it(self):
+        glass_sphere_scene()
+        img = bpy.data.images.new("lost-sky", 4, 2, float_buffer=True)
+        img.filepath = str(OUT / "no-such-folder" / "sky.hdr")
+        img.source = 'FILE'
+        environment_world(img)
+        with self.assertRaisesRegex(RuntimeError, r"environment image 'lost-sky' \(.*no-such-folder/sky.hdr\) "
+                                                  "cannot be read"):
+            bpy.ops.render.render()
+
+    def test_world_nodes_caustic_does_not_render_are_named(self):
+        glass_sphere_scene()
+        world = bpy.data.worlds.new("Procedural")
+        nodes, links = world.node_tree.nodes, world.node_tree.links
+        links.new(nodes.new("ShaderNodeTexSky").outputs["Color"], nodes["Background"].inputs["Color"])
+        bpy.context.scene.world = world
+        warnings = sys.modules["caustic.export"].scene_warnings(bpy.context.evaluated_depsgraph_get())
+        self.assertIn("world 'Procedural': the Background's Color comes from Sky Texture, which is not rendered "
+                      "(an Environment Texture is); its unlinked colour is rendered", warnings)
 
 
 if __name__ == "__main__":

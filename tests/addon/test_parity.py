@@ -60,6 +60,12 @@ def block_median_difference(image, reference, block=8):
     return float(np.median(np.abs(a - b) / np.maximum(b, 1e-3 * b.max())))
 
 
+def peak_distance(image, reference, mask):
+    """How far apart (pixels) the brightest pixels of `image` and `reference` within `mask` are."""
+    where = lambda x: np.array(np.unravel_index(np.argmax(np.where(mask, x @ LUMINANCE, -1.0)), mask.shape))
+    return float(np.linalg.norm(where(image) - where(reference)))
+
+
 def save_sheet(name, image, reference):
     """Caustic, Cycles and 4x their difference side by side, in sRGB, each pixel 4 x 4."""
     difference = np.abs(image - reference) * 4.0
@@ -81,6 +87,7 @@ class Parity(unittest.TestCase):
         objects = parity_scenes.SCENES[name]()
         tolerance = parity_scenes.TOLERANCES.get(name, TOLERANCE)
         colours = parity_scenes.COLOURS.get(name, {})
+        peaks = parity_scenes.PEAKS.get(name, {})
         image = render_caustic(name)
         reference, index = read_reference(name)
         sheet = save_sheet(name, image, reference)
@@ -98,11 +105,19 @@ class Parity(unittest.TestCase):
                 print(f"{name}: '{obj}' colour, Caustic's shares over Cycles' {shares.round(3)}")
                 if np.any(np.abs(shares - 1) > colours[obj]):
                     failures.append(f"'{obj}' colour: Caustic's channel shares {shares} of Cycles'")
+            if obj in peaks:
+                distance = peak_distance(image, reference, mask)
+                print(f"{name}: '{obj}' brightest pixel {distance:.1f} px from Cycles'")
+                if distance > peaks[obj]:
+                    failures.append(f"'{obj}': the brightest pixel lies {distance:.1f} px from Cycles'")
         median = block_median_difference(image, reference)
         print(f"{name}: block median difference {median:.4f} (sheet {sheet})")
         if median > tolerance:
             failures.append(f"block median difference {median:.3f}")
         self.assertEqual(failures, [], f"{name} differs from Cycles (sheet: {sheet})")
+
+    def test_hdri(self):
+        self.check("hdri")
 
     def test_glass(self):
         self.check("glass")
