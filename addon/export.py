@@ -200,6 +200,41 @@ def lens_extras(camera_object):
             "blade_rotation_deg": math.degrees(camera.dof.aperture_rotation)}
 
 
+def fitted_side(scene, camera):
+    """The side of the image (pixels, with the pixel aspect) that the camera's sensor or
+    orthographic scale spans: the wider one under Blender's Auto sensor fit."""
+    r = scene.render
+    width, height = r.resolution_x * r.pixel_aspect_x, r.resolution_y * r.pixel_aspect_y
+    return {'HORIZONTAL': width, 'VERTICAL': height}.get(camera.sensor_fit, max(width, height)), width, height
+
+
+def camera_extras(camera_object, scene):
+    """The camera's lens, its shift in image heights (Blender's is in the side its sensor fits)
+    and, for an equirectangular panorama (which glTF cannot hold), its ranges."""
+    camera = camera_object.data
+    extras = {}
+    lens = lens_extras(camera_object)
+    if lens:
+        extras["lens"] = lens
+    side, _, height = fitted_side(scene, camera)
+    if camera.shift_x or camera.shift_y:
+        extras["shift"] = [camera.shift_x * side / height, camera.shift_y * side / height]
+    if camera.type == 'PANO' and camera.panorama_type == 'EQUIRECTANGULAR':
+        extras["panorama"] = {"longitude_deg": [math.degrees(camera.longitude_min), math.degrees(camera.longitude_max)],
+                              "latitude_deg": [math.degrees(camera.latitude_min), math.degrees(camera.latitude_max)]}
+    return extras or None
+
+
+def fit_orthographic(gltf_camera, camera, scene):
+    """Blender's exporter spans the orthographic scale across the wider side whatever the sensor
+    fit; Cycles spans it across the side the sensor fits."""
+    if gltf_camera.orthographic is None:
+        return
+    side, width, height = fitted_side(scene, camera)
+    gltf_camera.orthographic.xmag = camera.ortho_scale / 2 * width / side
+    gltf_camera.orthographic.ymag = camera.ortho_scale / 2 * height / side
+
+
 def area_light_extras(light):
     """A Blender area light: shape, size, power (W) and colour."""
     extras = {"shape": light.shape, "size": light.size, "power": light.energy, "color": list(light.color)}
@@ -210,7 +245,7 @@ def area_light_extras(light):
 
 def node_extras(blender_object):
     """What the exporter drops from an object: area lights, the sun's angle, a point light's
-    radius, a light's colour temperature, the lens."""
+    radius, a light's colour temperature, the camera's lens, shift and panorama."""
     if blender_object.type == 'LIGHT':
         light = blender_object.data
         extras = {}
@@ -224,8 +259,7 @@ def node_extras(blender_object):
             extras["temperature_k"] = _temperatures[light.name]
         return extras or None
     if blender_object.type == 'CAMERA':
-        lens = lens_extras(blender_object)
-        return {"lens": lens} if lens else None
+        return camera_extras(blender_object, bpy.context.scene)
     return None
 
 
@@ -259,6 +293,10 @@ class glTF2ExportUserExtension:
     def gather_node_hook(self, gltf_node, blender_object, export_settings):
         if _exporting:
             add_extras(gltf_node, node_extras(blender_object))
+
+    def gather_camera_hook(self, gltf_camera, blender_camera, export_settings):
+        if _exporting:
+            fit_orthographic(gltf_camera, blender_camera, bpy.context.scene)
 
     def gather_material_hook(self, gltf_material, blender_material, export_settings):
         if _exporting:
@@ -389,12 +427,27 @@ def material_warnings(material):
     return warnings
 
 
+def camera_warnings(scene):
+    """What of the active camera Caustic does not render."""
+    if scene.camera is None:
+        return []
+    camera, name = scene.camera.data, f"camera '{scene.camera.name}'"
+    warnings = []
+    if camera.type == 'PANO' and camera.panorama_type != 'EQUIRECTANGULAR':
+        warnings.append(f"{name}: the {camera.panorama_type} panorama is not rendered (Equirectangular is); "
+                        "Caustic finds no camera to render with")
+    if scene.render.pixel_aspect_x != scene.render.pixel_aspect_y:
+        warnings.append(f"{name}: a pixel aspect other than 1 is not rendered (pixels are square)")
+    return warnings
+
+
 def scene_warnings(depsgraph):
     """What of the scene Caustic does not render, once per material."""
     materials = {slot.material for obj in depsgraph.scene.objects if obj.type == 'MESH'
                  for slot in obj.material_slots if slot.material is not None}
     warnings = [w for m in sorted(materials, key=lambda m: m.name) for w in material_warnings(m)]
     warnings += world_nodes(depsgraph.scene.world)[3]
+    warnings += camera_warnings(depsgraph.scene)
     for light in {obj.data for obj in depsgraph.scene.objects if obj.type == 'LIGHT'}:
         if light.type == 'SPOT' and light.shadow_soft_size > 0:
             warnings.append(f"light '{light.name}': a spot light's radius is not rendered; it renders as a point")

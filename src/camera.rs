@@ -1,7 +1,10 @@
-//! The perspective camera: film position (and a lens point) to a primary ray.
+//! The camera: film position (and a lens point) to a primary ray.
 //!
-//! The camera looks down its local -z with +y up (glTF's convention); `yfov` is the vertical
-//! field of view. Without a lens it is a pinhole and never draws a lens sample. With one it is a
+//! The camera looks down its local -z with +y up (glTF's convention). Its projection is
+//! perspective (`yfov`, the vertical field of view), orthographic (glTF's `ymag`, half the film's
+//! height) or Blender's equirectangular panorama (longitude and latitude ranges, as Cycles maps
+//! them: longitude 0 straight ahead, growing to the right). Blender's lens shift moves the film
+//! in its plane. Without a lens the camera is a pinhole and never draws a lens sample. With one it is a
 //! thin lens (pbrt-v4 section 5.2.3): rays start on the aperture (a disc, or a regular polygon of
 //! `blades` sides) and pass through the point the pinhole ray meets on the plane in focus.
 
@@ -22,7 +25,40 @@ pub struct Lens {
     pub blade_rotation: f32,
 }
 
-/// A perspective camera in world space.
+/// How the film maps to rays.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub enum Projection {
+    /// Rays from one point.
+    Perspective {
+        /// tan(yfov / 2).
+        tan_half_fov_y: f32,
+    },
+    /// Parallel rays from the film.
+    Orthographic {
+        /// Half the film's height, scene units.
+        half_height: f32,
+    },
+    /// Rays in every direction of the ranges.
+    Equirectangular {
+        /// Longitudes of the film's left and right edges, radians (0 ahead, growing rightward).
+        longitude: [f32; 2],
+        /// Latitudes of the film's bottom and top edges, radians.
+        latitude: [f32; 2],
+    },
+}
+
+impl Projection {
+    /// Its name, for reports.
+    pub fn name(&self) -> &'static str {
+        match self {
+            Projection::Perspective { .. } => "perspective",
+            Projection::Orthographic { .. } => "orthographic",
+            Projection::Equirectangular { .. } => "equirectangular panorama",
+        }
+    }
+}
+
+/// A camera in world space.
 #[derive(Clone, Copy, Debug)]
 pub struct Camera {
     /// Centre of projection.
@@ -33,28 +69,50 @@ pub struct Camera {
     pub up: Vec3,
     /// Viewing direction.
     pub forward: Vec3,
-    /// tan(yfov / 2).
-    pub tan_half_fov_y: f32,
+    /// How the film maps to rays.
+    pub projection: Projection,
+    /// The film's offset in its plane, in film heights (Blender's lens shift).
+    pub shift: Vec2,
     /// The thin lens, or `None` for a pinhole.
     pub lens: Option<Lens>,
 }
 
 impl Camera {
-    /// The camera of a node with world matrix `world` and vertical field of view `yfov` (radians).
-    pub fn from_node(world: Mat4, yfov: f32) -> Self {
+    /// The camera of a node with world matrix `world`, its projection and its film's shift.
+    pub fn from_node(world: Mat4, projection: Projection, shift: Vec2) -> Self {
         Camera {
             position: world.transform_point3(Vec3::ZERO),
             right: world.transform_vector3(Vec3::X).normalize(),
             up: world.transform_vector3(Vec3::Y).normalize(),
             forward: world.transform_vector3(-Vec3::Z).normalize(),
-            tan_half_fov_y: (yfov / 2.0).tan(),
+            projection,
+            shift,
             lens: None,
         }
     }
 
-    /// The same camera with `lens` (a pinhole when `None` or of zero aperture).
+    /// A perspective camera of vertical field of view `yfov` (radians), unshifted.
+    pub fn perspective(world: Mat4, yfov: f32) -> Self {
+        Camera::from_node(world, Projection::Perspective { tan_half_fov_y: (yfov / 2.0).tan() }, Vec2::ZERO)
+    }
+
+    /// The same camera with `lens` (a pinhole when `None` or of zero aperture; a panorama has no
+    /// lens).
     pub fn with_lens(self, lens: Option<Lens>) -> Self {
-        Camera { lens: lens.filter(|l| l.aperture_radius > 0.0), ..self }
+        let panorama = matches!(self.projection, Projection::Equirectangular { .. });
+        Camera { lens: lens.filter(|l| l.aperture_radius > 0.0 && !panorama), ..self }
+    }
+
+    /// Where `film` lies on the film plane, in half film heights from the centre of the
+    /// unshifted film, x to the right and y up.
+    fn film_plane(&self, film: Vec2, aspect: f32) -> Vec2 {
+        Vec2::new((2.0 * film.x - 1.0) * aspect, 1.0 - 2.0 * film.y) + 2.0 * self.shift
+    }
+
+    /// The film position of a point `(x, y)` of the film plane (the inverse of `film_plane`).
+    fn film_of_plane(&self, plane: Vec2, aspect: f32) -> Vec2 {
+        let p = plane - 2.0 * self.shift;
+        Vec2::new((p.x / aspect + 1.0) / 2.0, (1.0 - p.y) / 2.0)
     }
 
     /// The ray through `film` from the lens point `u` (ignored by a pinhole).
@@ -70,23 +128,47 @@ impl Camera {
     /// The ray through `film`, in [0, 1]^2 with (0, 0) the top-left corner, for an image of
     /// width / height `aspect`. Returns (origin, unit direction).
     pub fn ray(&self, film: Vec2, aspect: f32) -> (Vec3, Vec3) {
-        let x = (2.0 * film.x - 1.0) * self.tan_half_fov_y * aspect;
-        let y = (1.0 - 2.0 * film.y) * self.tan_half_fov_y;
-        let direction = (self.forward + x * self.right + y * self.up).normalize();
-        (self.position, direction)
+        match self.projection {
+            Projection::Perspective { tan_half_fov_y } => {
+                let p = self.film_plane(film, aspect) * tan_half_fov_y;
+                (self.position, (self.forward + p.x * self.right + p.y * self.up).normalize())
+            }
+            Projection::Orthographic { half_height } => {
+                let p = self.film_plane(film, aspect) * half_height;
+                (self.position + p.x * self.right + p.y * self.up, self.forward)
+            }
+            Projection::Equirectangular { longitude, latitude } => {
+                let lon = longitude[0] + (longitude[1] - longitude[0]) * film.x;
+                let lat = latitude[1] + (latitude[0] - latitude[1]) * film.y;
+                let (sin_lon, cos_lon) = lon.sin_cos();
+                let (sin_lat, cos_lat) = lat.sin_cos();
+                let local = self.forward * (cos_lat * cos_lon) + self.right * (cos_lat * sin_lon) + self.up * sin_lat;
+                (self.position, local.normalize())
+            }
+        }
     }
 
     /// Where the point `p` appears on the film (the inverse of [`Camera::ray`]), or `None`
     /// behind the camera.
     pub fn project(&self, p: Vec3, aspect: f32) -> Option<Vec2> {
         let d = p - self.position;
-        let z = d.dot(self.forward);
-        if z <= 0.0 {
-            return None;
+        let (x, y, z) = (d.dot(self.right), d.dot(self.up), d.dot(self.forward));
+        match self.projection {
+            Projection::Perspective { tan_half_fov_y } => {
+                (z > 0.0).then(|| self.film_of_plane(Vec2::new(x, y) / (z * tan_half_fov_y), aspect))
+            }
+            Projection::Orthographic { half_height } => {
+                (z > 0.0).then(|| self.film_of_plane(Vec2::new(x, y) / half_height, aspect))
+            }
+            Projection::Equirectangular { longitude, latitude } => {
+                let lon = x.atan2(z);
+                let lat = (y / d.length()).clamp(-1.0, 1.0).asin();
+                Some(Vec2::new(
+                    (lon - longitude[0]) / (longitude[1] - longitude[0]),
+                    (lat - latitude[1]) / (latitude[0] - latitude[1]),
+                ))
+            }
         }
-        let x = d.dot(self.right) / (z * self.tan_half_fov_y * aspect);
-        let y = d.dot(self.up) / (z * self.tan_half_fov_y);
-        Some(Vec2::new((x + 1.0) / 2.0, (1.0 - y) / 2.0))
     }
 }
 
@@ -109,17 +191,40 @@ fn aperture_point(lens: &Lens, u: Vec2) -> Vec2 {
 #[cfg(test)]
 mod tests {
     use super::*;
+    use std::f32::consts::PI;
 
     #[test]
-    fn project_inverts_ray() {
-        let camera = Camera::from_node(
-            Mat4::from_rotation_y(0.3) * Mat4::from_translation(Vec3::new(1.0, 2.0, 3.0)),
-            0.8,
-        );
-        let film = Vec2::new(0.2, 0.7);
-        let (origin, direction) = camera.ray(film, 1.5);
-        let back = camera.project(origin + 5.0 * direction, 1.5).unwrap();
-        assert!((back - film).length() < 1e-5, "{back}");
+    fn project_inverts_ray_for_every_projection() {
+        let world = Mat4::from_rotation_y(0.3) * Mat4::from_translation(Vec3::new(1.0, 2.0, 3.0));
+        let panorama = Projection::Equirectangular { longitude: [-3.0, 3.0], latitude: [-1.5, 1.2] };
+        for projection in
+            [Projection::Perspective { tan_half_fov_y: 0.4 }, Projection::Orthographic { half_height: 2.0 }, panorama]
+        {
+            let camera = Camera::from_node(world, projection, Vec2::new(0.1, -0.05));
+            let film = Vec2::new(0.2, 0.7);
+            let (origin, direction) = camera.ray(film, 1.5);
+            let back = camera.project(origin + 5.0 * direction, 1.5).unwrap();
+            assert!((back - film).length() < 1e-5, "{projection:?}: {back}");
+        }
+    }
+
+    #[test]
+    fn a_shift_of_half_the_film_height_moves_the_centre_to_the_top_edge() {
+        let tan = 0.4;
+        let camera = Camera::from_node(Mat4::IDENTITY, Projection::Perspective { tan_half_fov_y: tan }, Vec2::new(0.0, 0.5));
+        let (_, direction) = camera.ray(Vec2::new(0.5, 0.5), 2.0);
+        assert!((direction - Vec3::new(0.0, tan, -1.0).normalize()).length() < 1e-6, "{direction}");
+    }
+
+    #[test]
+    fn a_full_panorama_looks_ahead_at_its_centre_and_behind_at_its_edges() {
+        let full = Projection::Equirectangular { longitude: [-PI, PI], latitude: [-PI / 2.0, PI / 2.0] };
+        let camera = Camera::from_node(Mat4::IDENTITY, full, Vec2::ZERO);
+        let dir = |x: f32, y: f32| camera.ray(Vec2::new(x, y), 2.0).1;
+        assert!((dir(0.5, 0.5) - -Vec3::Z).length() < 1e-6);
+        assert!((dir(0.75, 0.5) - Vec3::X).length() < 1e-6, "a quarter to the right looks right");
+        assert!((dir(0.0, 0.5) - Vec3::Z).length() < 1e-6);
+        assert!((dir(0.5, 0.0) - Vec3::Y).length() < 1e-6, "the top row looks up");
     }
 }
 
@@ -130,7 +235,7 @@ mod lens_tests {
     #[test]
     fn lens_rays_meet_on_the_plane_in_focus() {
         let lens = Lens { aperture_radius: 0.1, focus_distance: 4.0, blades: 0, blade_rotation: 0.0 };
-        let camera = Camera::from_node(Mat4::IDENTITY, 0.8).with_lens(Some(lens));
+        let camera = Camera::perspective(Mat4::IDENTITY, 0.8).with_lens(Some(lens));
         let film = Vec2::new(0.3, 0.6);
         let (pinhole_origin, pinhole_dir) = camera.ray(film, 1.5);
         let focus = pinhole_origin + pinhole_dir * (4.0 / pinhole_dir.dot(camera.forward));

@@ -13,6 +13,7 @@ pub fn report(settings: &RenderSettings) -> Result<Value, String> {
     let absorption = description.materials.iter().any(|m| m.volume.is_some());
     let cut_away = description.materials.iter().any(|m| m.alpha.cuts());
     let fps = description.fps;
+    let projection = description.camera.projection.name();
     let shot = Shot::new(settings, description)?;
     let prepared = shot.prepared();
     let (fixed, moving) = prepared.triangle_counts();
@@ -58,6 +59,7 @@ pub fn report(settings: &RenderSettings) -> Result<Value, String> {
         "scene": settings.scene.display().to_string(),
         "frames": settings.frames,
         "fps": fps,
+        "camera": projection,
         "shutter_frames": shutter.length,
         "needs": needs,
         "reuse_shares": reuse_shares,

@@ -8,6 +8,7 @@ use glam::{Vec2, Vec3};
 use super::animation::Rig;
 use super::TriangleRef;
 pub use crate::camera::Lens;
+use crate::camera::Projection;
 use crate::geometry::Cone;
 use crate::lights::World;
 use crate::materials::Material;
@@ -57,8 +58,10 @@ pub struct PunctualLight {
 pub struct CameraInstance {
     /// The glTF node.
     pub node: usize,
-    /// Vertical field of view, radians.
-    pub yfov: f32,
+    /// How its film maps to rays.
+    pub projection: Projection,
+    /// Its film's offset in its plane, in film heights (Blender's lens shift).
+    pub shift: Vec2,
     /// The file's aspect ratio, if any.
     pub aspect_ratio: Option<f32>,
     /// Focal length in millimetres (from the extras, else from the field of view and a 36 mm

@@ -72,6 +72,26 @@ pub struct LensExtras {
     pub blade_rotation_deg: f32,
 }
 
+/// Blender's equirectangular panoramic camera: the longitudes and latitudes the film spans.
+#[derive(Debug, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct PanoramaExtras {
+    /// Longitudes of the film's left and right edges, degrees (0 ahead, growing to the right).
+    #[serde(default = "full_longitude")]
+    pub longitude_deg: [f32; 2],
+    /// Latitudes of the film's bottom and top edges, degrees.
+    #[serde(default = "full_latitude")]
+    pub latitude_deg: [f32; 2],
+}
+
+fn full_longitude() -> [f32; 2] {
+    [-180.0, 180.0]
+}
+
+fn full_latitude() -> [f32; 2] {
+    [-90.0, 90.0]
+}
+
 /// The world: a uniform colour, or an equirectangular image, times a strength.
 #[derive(Debug, Deserialize)]
 #[serde(deny_unknown_fields)]
@@ -104,6 +124,11 @@ pub struct NodeExtras {
     pub temperature_k: Option<f32>,
     /// The node's camera's depth of field.
     pub lens: Option<LensExtras>,
+    /// The node's camera's lens shift, in film heights (Blender's shift times the side the
+    /// sensor fits, over the height).
+    pub shift: Option<[f32; 2]>,
+    /// The node is Blender's equirectangular panoramic camera (glTF has none).
+    pub panorama: Option<PanoramaExtras>,
 }
 
 /// The `caustic` entry of a material's extras: how its index depends on wavelength (the first

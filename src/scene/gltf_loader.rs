@@ -23,10 +23,11 @@ use super::description::{
     CameraInstance, Description, LensSettings, MeshInstance, PunctualKind, PunctualLight, Shutter,
 };
 use super::extras::{
-    self, AreaLightExtras, LensExtras, NodeExtras, SceneExtras, ShutterExtras, ShutterPosition,
+    self, AreaLightExtras, NodeExtras, SceneExtras, ShutterExtras, ShutterPosition,
 };
 use super::gltf_materials::material;
 use super::{shapes, tangents, SceneError, TriangleRef, VertexExtras};
+use crate::camera::Projection;
 use crate::geometry::Cone;
 use crate::lights::World;
 use crate::materials::{BaseColour, Material};
@@ -266,6 +267,35 @@ fn light_tint(extras: &NodeExtras, name: &str) -> Result<Vec3, String> {
     }
 }
 
+/// An orthographic camera from glTF's half extents: the film's half height is `ymag` (its width
+/// follows the image's aspect).
+fn orthographic_projection(xmag: f32, ymag: f32, name: &str) -> Result<Projection, String> {
+    if !(ymag > 0.0 && ymag.is_finite() && xmag > 0.0 && xmag.is_finite()) {
+        return Err(format!(
+            "camera node '{name}': an orthographic camera needs positive xmag and ymag, got {xmag} and {ymag}"
+        ));
+    }
+    Ok(Projection::Orthographic { half_height: ymag })
+}
+
+/// A panorama's projection from its extras, refused where its ranges are empty or beyond the sphere.
+fn panorama_projection(panorama: &extras::PanoramaExtras, name: &str) -> Result<Projection, String> {
+    let [lon0, lon1] = panorama.longitude_deg;
+    let [lat0, lat1] = panorama.latitude_deg;
+    let valid = lon0 < lon1 && lon1 - lon0 <= 360.0 && -90.0 <= lat0 && lat0 < lat1 && lat1 <= 90.0;
+    if !valid {
+        return Err(format!(
+            "camera node '{name}' extras `caustic.panorama`: expected longitudes from low to high spanning at most \
+             360 degrees and latitudes from low to high within [-90, 90], got {:?} and {:?}",
+            panorama.longitude_deg, panorama.latitude_deg
+        ));
+    }
+    Ok(Projection::Equirectangular {
+        longitude: [lon0.to_radians(), lon1.to_radians()],
+        latitude: [lat0.to_radians(), lat1.to_radians()],
+    })
+}
+
 /// Blender's sun angle is the full angular diameter; without one the sun is a delta light.
 fn sun_disc(extras: &NodeExtras) -> Cone {
     extras.sun_angle_deg.map_or(Cone::default(), |deg| Cone::from_half_angle(deg.to_radians() / 2.0))
@@ -283,7 +313,9 @@ impl Builder<'_> {
             self.add_mesh(&mesh, node.index())?;
         }
         if let Some(camera) = node.camera() {
-            self.add_camera(&camera, node.index(), name, extras.lens.as_ref())?;
+            self.add_camera(Some(&camera), node.index(), name, &extras)?;
+        } else if extras.panorama.is_some() {
+            self.add_camera(None, node.index(), name, &extras)?;
         }
         let tint = light_tint(&extras, name)?;
         if let Some(light) = node.light() {
@@ -315,12 +347,13 @@ impl Builder<'_> {
         Ok(())
     }
 
+    /// Adds the camera of a node: its glTF camera, or the panorama of its extras (which wins).
     fn add_camera(
         &mut self,
-        camera: &gltf::Camera,
+        camera: Option<&gltf::Camera>,
         node: usize,
         name: &str,
-        lens: Option<&LensExtras>,
+        extras: &NodeExtras,
     ) -> Result<(), String> {
         match &self.wanted_camera {
             Some(wanted) if wanted != name => return Ok(()),
@@ -330,11 +363,7 @@ impl Builder<'_> {
             }
             _ => {}
         }
-        let gltf::camera::Projection::Perspective(p) = camera.projection() else {
-            return Err(format!(
-                "camera node '{name}': orthographic cameras are not supported; use a perspective camera"
-            ));
-        };
+        let lens = extras.lens.as_ref();
         if let Some(lens) = lens {
             if !(lens.fstop >= 0.0 && lens.focus_distance >= 0.0 && lens.fstop.is_finite()) {
                 return Err(format!(
@@ -342,14 +371,37 @@ impl Builder<'_> {
                 ));
             }
         }
+        let (projection, aspect_ratio) = match (&extras.panorama, camera.map(|c| c.projection())) {
+            (Some(panorama), _) => {
+                if lens.is_some_and(|l| l.fstop > 0.0) {
+                    self.warnings.push(format!("camera node '{name}': depth of field is not rendered on a panorama"));
+                }
+                (panorama_projection(panorama, name)?, None)
+            }
+            (None, Some(gltf::camera::Projection::Perspective(p))) => {
+                (Projection::Perspective { tan_half_fov_y: (p.yfov() / 2.0).tan() }, p.aspect_ratio())
+            }
+            (None, Some(gltf::camera::Projection::Orthographic(o))) => {
+                (orthographic_projection(o.xmag(), o.ymag(), name)?, Some(o.xmag() / o.ymag()))
+            }
+            (None, None) => return Err(format!("camera node '{name}' has neither a camera nor a panorama")),
+        };
+        let shift = extras.shift.map_or(Vec2::ZERO, Vec2::from);
+        if !shift.is_finite() {
+            return Err(format!("camera node '{name}' extras `caustic.shift`: expected two numbers, got {shift}"));
+        }
         // Blender's sensor fit: a 36 mm sensor across the wider side of the image.
-        let aspect = p.aspect_ratio().unwrap_or(1.0).max(1e-6);
-        let tan_half_wide = (p.yfov() / 2.0).tan() * aspect.max(1.0);
+        let aspect = aspect_ratio.unwrap_or(1.0).max(1e-6);
+        let tan_half_wide = match projection {
+            Projection::Perspective { tan_half_fov_y } => tan_half_fov_y * aspect.max(1.0),
+            _ => 1.0,
+        };
         let focal_length_mm = lens.and_then(|l| l.focal_length_mm).unwrap_or(18.0 / tan_half_wide);
         self.camera = Some(CameraInstance {
             node,
-            yfov: p.yfov(),
-            aspect_ratio: p.aspect_ratio(),
+            projection,
+            shift,
+            aspect_ratio,
             focal_length_mm,
             lens: lens.map(|l| LensSettings {
                 fstop: l.fstop,

@@ -295,7 +295,7 @@ impl Prepared {
             open_edges,
             distant_lights,
             moving_lights,
-            camera: Camera::from_node(camera_world, d.camera.yfov).with_lens(self.lens),
+            camera: Camera::from_node(camera_world, d.camera.projection, d.camera.shift).with_lens(self.lens),
             resolution: d.resolution,
             aspect_ratio: d.camera.aspect_ratio,
         }

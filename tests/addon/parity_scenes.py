@@ -428,6 +428,49 @@ def hdri():
     return {"Floor": 1, "Grey": 2, "Mirror": 3, "Sky": 0, "Shadow": floor_disc((-1.0, -1.6), 0.3)}
 
 
+def silhouettes(resolution):
+    """Black objects (a cube, a sphere, a cone at different depths) under a uniform white world:
+    the camera's framing shows as their silhouettes."""
+    clear()
+    scene = bpy.context.scene
+    scene.render.resolution_x, scene.render.resolution_y = resolution
+    world((1.0, 1.0, 1.0))
+    black = principled("Black", Base_Color=(0.0, 0.0, 0.0, 1.0), Specular_IOR_Level=0.0, Roughness=1.0)
+    add(bpy.ops.mesh.primitive_cube_add, black, index=1, size=1.0, location=(-1.5, 1.0, 0.5))
+    add(bpy.ops.mesh.primitive_uv_sphere_add, black, index=2, segments=32, ring_count=16, radius=0.7,
+        location=(0.5, -0.5, 0.7))
+    add(bpy.ops.mesh.primitive_cone_add, black, index=3, radius1=0.5, depth=1.5, location=(1.8, 2.5, 0.75))
+    return scene
+
+
+def ortho_camera():
+    """Orthographic, 64 x 48, the scale fitted to the height (Sensor Fit Vertical, which Blender's
+    glTF exporter ignores)."""
+    silhouettes((64, 48))
+    cam = camera((6.0, -8.0, 6.0), (0.0, 0.5, 0.5))
+    cam.data.type, cam.data.ortho_scale, cam.data.sensor_fit = 'ORTHO', 5.0, 'VERTICAL'
+    return {"World": 0}
+
+
+def shifted_camera():
+    """Perspective, portrait 48 x 64, 35 mm, shifted right and down (glTF has no shift)."""
+    silhouettes((48, 64))
+    cam = camera((0.0, -9.0, 3.0), (0.0, 0.5, 0.8), lens=35.0)
+    cam.data.shift_x, cam.data.shift_y = 0.15, -0.1
+    return {"World": 0}
+
+
+def panorama_camera():
+    """Blender's equirectangular panoramic camera, 64 x 32, all around, among the objects."""
+    silhouettes((64, 32))
+    cam = camera((0.0, 0.8, 1.0), (1.0, 0.8, 1.0))
+    cam.data.type, cam.data.panorama_type = 'PANO', 'EQUIRECTANGULAR'
+    return {"World": 0}
+
+
+# Scenes whose dark silhouettes (pixels under half the world's brightness) must match Cycles' within a pixel.
+SILHOUETTES = {"ortho_camera", "shifted_camera", "panorama_camera"}
+
 # The scenes compared at a wider tolerance than 5% (their references are noisier: caustics).
 TOLERANCES = {"glass": 0.07}
 
@@ -443,4 +486,5 @@ COLOURS = {"glass": {"Tinted light": 0.03}, "warm_light": {"Floor": 0.03, "Grey"
 
 SCENES = {"glass": glass, "principled_spheres": principled_spheres, "textured": textured, "normal_mapped": normal_mapped,
           "coated": coated, "sheen": sheen, "leaf": leaf, "warm_light": warm_light, "soft_light": soft_light,
-          "hdri": hdri}
+          "hdri": hdri, "ortho_camera": ortho_camera, "shifted_camera": shifted_camera,
+          "panorama_camera": panorama_camera}

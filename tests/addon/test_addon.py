@@ -248,8 +248,9 @@ class Errors(unittest.TestCase):
 
     def test_a_scene_the_renderer_rejects_fails_with_its_message(self):
         scene = glass_sphere_scene()
-        scene.camera.data.type = 'ORTHO'
-        with self.assertRaisesRegex(RuntimeError, "orthographic cameras are not supported"):
+        dof = scene.camera.data.dof
+        dof.use_dof, dof.aperture_fstop, dof.focus_distance = True, 2.8, 0.0
+        with self.assertRaisesRegex(RuntimeError, "depth of field .* needs a positive focus distance"):
             bpy.ops.render.render()
 
 

@@ -66,6 +66,21 @@ def peak_distance(image, reference, mask):
     return float(np.linalg.norm(where(image) - where(reference)))
 
 
+def dilated(mask):
+    """`mask` grown by one pixel in every direction (diagonals too)."""
+    padded = np.pad(mask, 1)
+    h, w = mask.shape
+    return np.any([padded[1 + dy:1 + dy + h, 1 + dx:1 + dx + w] for dy in (-1, 0, 1) for dx in (-1, 0, 1)], axis=0)
+
+
+def silhouette_mismatch(image, reference):
+    """The pixels of either image's silhouette (under half the reference's median luminance)
+    farther than one pixel from the other's, and how many pixels the reference's covers."""
+    threshold = 0.5 * np.median(reference @ LUMINANCE)
+    ours, theirs = image @ LUMINANCE < threshold, reference @ LUMINANCE < threshold
+    return int((ours & ~dilated(theirs)).sum() + (theirs & ~dilated(ours)).sum()), int(theirs.sum())
+
+
 def save_sheet(name, image, reference):
     """Caustic, Cycles and 4x their difference side by side, in sRGB, each pixel 4 x 4."""
     difference = np.abs(image - reference) * 4.0
@@ -110,11 +125,26 @@ class Parity(unittest.TestCase):
                 print(f"{name}: '{obj}' brightest pixel {distance:.1f} px from Cycles'")
                 if distance > peaks[obj]:
                     failures.append(f"'{obj}': the brightest pixel lies {distance:.1f} px from Cycles'")
+        if name in parity_scenes.SILHOUETTES:
+            stray, covered = silhouette_mismatch(image, reference)
+            print(f"{name}: {stray} silhouette pixels more than 1 px from Cycles' ({covered} pixels)")
+            self.assertGreater(covered, 50, f"{name}: the silhouettes cover too few pixels")
+            if stray:
+                failures.append(f"{stray} silhouette pixels lie more than 1 px from Cycles'")
         median = block_median_difference(image, reference)
         print(f"{name}: block median difference {median:.4f} (sheet {sheet})")
         if median > tolerance:
             failures.append(f"block median difference {median:.3f}")
         self.assertEqual(failures, [], f"{name} differs from Cycles (sheet: {sheet})")
+
+    def test_ortho_camera(self):
+        self.check("ortho_camera")
+
+    def test_shifted_camera(self):
+        self.check("shifted_camera")
+
+    def test_panorama_camera(self):
+        self.check("panorama_camera")
 
     def test_hdri(self):
         self.check("hdri")
@@ -149,4 +179,4 @@ class Parity(unittest.TestCase):
 
 if __name__ == "__main__":
     enable_addon(BINARY)
-    unittest.main(argv=[sys.argv[0], "-v"])
+    unittest.main(argv=[sys.argv[0], "-v", *sys.argv[1:]])

@@ -269,9 +269,13 @@ impl GltfBuilder {
 
     /// Adds a perspective camera of aspect ratio `aspect` at `position` looking along `dir`.
     pub fn camera_with_aspect(&mut self, position: [f32; 3], dir: [f32; 3], yfov: f32, aspect: f32) {
-        self.cameras.push(
-            json!({"type": "perspective", "perspective": {"yfov": yfov, "znear": 0.01, "aspectRatio": aspect}}),
-        );
+        let camera = json!({"type": "perspective", "perspective": {"yfov": yfov, "znear": 0.01, "aspectRatio": aspect}});
+        self.camera_of(camera, position, dir);
+    }
+
+    /// Adds the glTF camera `camera` at `position` looking along `dir`.
+    pub fn camera_of(&mut self, camera: Value, position: [f32; 3], dir: [f32; 3]) {
+        self.cameras.push(camera);
         self.nodes.push(json!({"name": "Camera", "camera": self.cameras.len() - 1, "translation": position, "rotation": look_rotation(dir)}));
     }
 
@@ -289,6 +293,11 @@ impl GltfBuilder {
     /// Adds a node with `caustic` extras (for example an area light) at `position` pointing along `dir`.
     pub fn extras_node(&mut self, name: &str, caustic: Value, position: [f32; 3], dir: [f32; 3]) {
         self.nodes.push(json!({"name": name, "translation": position, "rotation": look_rotation(dir), "extras": {"caustic": caustic}}));
+    }
+
+    /// Sets node `node`'s `caustic` extras.
+    pub fn set_node_extras(&mut self, node: usize, caustic: Value) {
+        self.nodes[node]["extras"] = json!({"caustic": caustic});
     }
 
     /// Sets the scene's `caustic` extras.
