@@ -149,6 +149,23 @@ fn volume_seed() -> Value {
     gltf.to_json()
 }
 
+/// A scene with every camera input Caustic reads: an orthographic camera, a shifted perspective
+/// one with a lens, and a panorama on a node of its own, which the scene's extras choose.
+fn camera_seed() -> Value {
+    let mut gltf = common::GltfBuilder::default();
+    let grey = gltf.material(common::diffuse([0.5, 0.5, 0.5]));
+    gltf.sphere("Ball", [0.0, 0.0, -3.0], 0.5, 12, grey);
+    let ortho = json!({"type": "orthographic", "orthographic": {"xmag": 2.0, "ymag": 1.5, "znear": 0.01, "zfar": 50.0}});
+    gltf.camera_of(ortho, [0.0, 0.0, 2.0], [0.0, 0.0, -1.0]);
+    gltf.camera([0.0, 1.0, 2.0], [0.0, -0.3, -1.0], 0.7);
+    let lens = json!({"fstop": 2.8, "focus_distance": 4.0, "blades": 6});
+    gltf.set_node_extras(gltf.last_node(), json!({"shift": [0.1, -0.2], "lens": lens}));
+    let panorama = json!({"panorama": {"longitude_deg": [-120.0, 90.0], "latitude_deg": [-45.0, 60.0]}});
+    gltf.extras_node("Panorama", panorama, [0.0, 0.0, 0.0], [0.0, 0.0, -1.0]);
+    gltf.scene_extras(json!({"camera": "Panorama", "world": {"color": [1.0, 1.0, 1.0]}}));
+    gltf.to_json()
+}
+
 /// A value to put in place of any JSON value.
 fn hostile_value(rng: &mut impl Rng) -> Value {
     let values = [
@@ -223,11 +240,12 @@ proptest! {
     #[test]
     fn real_json_with_hostile_values_never_panics(seed in any::<u64>()) {
         let mut rng = rand_pcg::Pcg64::seed_from_u64(seed);
-        let name = ["furnace.gltf", "cornell_animated.gltf", "prism.gltf", "spot_glass.gltf", "textured", "volumes"]
-            [rng.random_range(0..6)];
+        let name = ["furnace.gltf", "cornell_animated.gltf", "prism.gltf", "spot_glass.gltf", "textured", "volumes",
+            "cameras"][rng.random_range(0..7)];
         let mut doc: Value = match name {
             "textured" => textured_seed(),
             "volumes" => volume_seed(),
+            "cameras" => camera_seed(),
             _ => serde_json::from_slice(&std::fs::read(scenes().join(name)).unwrap()).unwrap(),
         };
         for _ in 0..rng.random_range(1..4) {
@@ -237,18 +255,21 @@ proptest! {
     }
 }
 
-/// The textured and volume seeds themselves load and render (so their mutations explore past the
-/// loader), with no warning but the pane's (glass on an open mesh).
+/// The textured, volume and camera seeds themselves load and render (so their mutations explore
+/// past the loader), with no warning but the pane's (glass on an open mesh) and the cameras not
+/// chosen.
 #[test]
 fn the_built_seeds_render() {
     let dir = tempfile::tempdir().unwrap();
-    for (name, seed, expected) in [("textured", textured_seed(), 0), ("volumes", volume_seed(), 1)] {
+    let seeds = [("textured", textured_seed(), 0, "'Pane'"), ("volumes", volume_seed(), 1, "'Pane'"),
+        ("cameras", camera_seed(), 0, "")];
+    for (name, seed, expected, named) in seeds {
         let path = dir.path().join(format!("{name}.gltf"));
         std::fs::write(&path, seed.to_string()).unwrap();
         let description = Description::load(&path).unwrap();
         let warnings = &description.warnings;
         assert!(
-            warnings.len() == expected && warnings.iter().all(|w| w.contains("'Pane'")),
+            warnings.len() == expected && warnings.iter().all(|w| w.contains(named)),
             "{name}: {warnings:?}"
         );
         load_and_render(&path).unwrap();
