@@ -28,9 +28,15 @@ def frame_spec(frames):
     return ",".join(str(f) for f in frames)
 
 
-def render_flags(settings):
-    """`caustic render` flags from the scene's Caustic settings."""
+def render_flags(scene):
+    """`caustic render` flags from the scene's Caustic settings and its render region."""
+    settings = scene.caustic
     flags = ["--passes", str(settings.passes), "--alpha", repr(settings.alpha), "--seed", str(settings.seed)]
+    region = export.render_region(scene)
+    if region is not None:
+        x, y, width, height = region
+        top = export.resolution(scene)[1] - (y + height)
+        flags += ["--crop", f"{x},{top},{width},{height}"]
     if settings.use_time_budget:
         flags += ["--time-budget", repr(settings.time_budget)]
     if settings.use_target_error:
@@ -65,7 +71,7 @@ class Session:
             self.close()
             raise CausticError(f"cannot export the scene to glTF: {error}") from error
         args = [binary, "render", str(scene_path), "-o", str(self.folder / "frames"), "--frames",
-                frame_spec(frames), "--progress", "json", *render_flags(scene.caustic)]
+                frame_spec(frames), "--progress", "json", *render_flags(scene)]
         self.process = RenderProcess(args)
         self.written = {}
 
@@ -172,8 +178,11 @@ class CausticRenderEngine(bpy.types.RenderEngine):
             close_session()
 
     def load(self, scene, path):
-        """Puts the frame's EXR (Combined and Error) into the render result."""
-        width, height = export.resolution(scene)
+        """Puts the frame's EXR (Combined and Error) into the render result: the whole image, or
+        the render region's window (Blender's result is then the region's, which Blender places
+        in the image unless it is cropped to it)."""
+        region = export.render_region(scene)
+        width, height = export.resolution(scene) if region is None else region[2:]
         self.add_pass("Error", 1, "Y")
         result = self.begin_result(0, 0, width, height)
         result.layers[0].load_from_file(path)

@@ -24,6 +24,9 @@ _exporting = False
 # runs, so that an image that cannot be read stops the export with its name).
 _world = None
 
+# While Caustic exports, the names of the objects rendered as holdouts (`holdout_objects`).
+_holdouts = set()
+
 # While Caustic exports, the colour temperature (kelvin) of each light that uses one, by name:
 # Blender's exporter raises a TypeError on a light with `use_temperature`, so it is switched off
 # for the export and the temperature travels in the extras (the renderer multiplies the colour
@@ -148,6 +151,20 @@ def write_environment(image, folder):
     return "environment.exr"
 
 
+def render_region(scene):
+    """Blender's render region in pixels as `(x, y, width, height)`: x from the left, y from the
+    bottom as Blender counts (Blender truncates the border's fractions), or None without one."""
+    r = scene.render
+    if not r.use_border:
+        return None
+    width, height = resolution(scene)
+    x0, x1 = int(r.border_min_x * width), int(r.border_max_x * width)
+    y0, y1 = int(r.border_min_y * height), int(r.border_max_y * height)
+    if x1 <= x0 or y1 <= y0:
+        return None
+    return x0, y0, x1 - x0, y1 - y0
+
+
 def world_extras(world, folder):
     """The world: an environment image (written into `folder`) with its rotation and the
     Background's strength, or the Background's colour and strength (or the world's colour)."""
@@ -174,6 +191,8 @@ def scene_extras(scene, world):
     extras = {"resolution": resolution(scene), "fps": r.fps / r.fps_base}
     if scene.camera is not None:
         extras["camera"] = scene.camera.name
+    if r.film_transparent:
+        extras["transparent_film"] = True
     if r.use_motion_blur:
         extras["shutter"] = {"length_frames": r.motion_blur_shutter, "position": r.motion_blur_position}
     if world is not None:
@@ -243,6 +262,21 @@ def area_light_extras(light):
     return extras
 
 
+def holdout_objects(view_layer):
+    """The objects Cycles renders as holdouts in `view_layer`: those in a collection set to
+    Holdout there (and its children), and those with their own Holdout (Visibility > Mask)."""
+    held = set()
+
+    def visit(layer_collection, inherited):
+        holdout = inherited or layer_collection.holdout
+        if holdout:
+            held.update(obj.name for obj in layer_collection.collection.objects)
+        for child in layer_collection.children:
+            visit(child, holdout)
+    visit(view_layer.layer_collection, False)
+    return held | {obj.name for obj in view_layer.objects if obj.is_holdout}
+
+
 def node_extras(blender_object):
     """What the exporter drops from an object: area lights, the sun's angle, a point light's
     radius, a light's colour temperature, the camera's lens, shift and panorama."""
@@ -260,6 +294,8 @@ def node_extras(blender_object):
         return extras or None
     if blender_object.type == 'CAMERA':
         return camera_extras(blender_object, bpy.context.scene)
+    if blender_object.name in _holdouts:
+        return {"holdout": True}
     return None
 
 
@@ -268,6 +304,9 @@ def material_extras(material):
     settings = getattr(material, "caustic", None)
     if settings is None:
         return None
+    surface = surface_node(material)
+    if surface is not None and surface.type == 'HOLDOUT':
+        return {"holdout": True}
     extras = {"priority": settings.priority} if settings.priority else {}
     if settings.dispersion == 'ABBE':
         extras["abbe"] = settings.abbe
@@ -289,6 +328,16 @@ class glTF2ExportUserExtension:
     def gather_scene_hook(self, gltf_scene, blender_scene, export_settings):
         if _exporting:
             add_extras(gltf_scene, scene_extras(blender_scene, _world))
+
+    def gather_tree_filter_tag_hook(self, tree, export_settings):
+        """Leaves out the objects of collections excluded from the view layer (Blender's
+        exporter keeps them: they are not hidden from renders, only excluded)."""
+        if not _exporting:
+            return
+        in_view_layer = set(bpy.context.view_layer.objects)
+        for node in tree.nodes.values():
+            if node.blender_object is not None and node.blender_object not in in_view_layer:
+                node.keep_tag = False
 
     def gather_node_hook(self, gltf_node, blender_object, export_settings):
         if _exporting:
@@ -416,6 +465,8 @@ def material_warnings(material):
     surface = surface_node(material)
     if surface is None:
         return volume_warnings(material)
+    if surface.type == 'HOLDOUT':
+        return volume_warnings(material)
     if surface.type != 'BSDF_PRINCIPLED':
         return [f"material '{material.name}': only the Principled BSDF is supported ({surface.name} is exported "
                 "as Blender's glTF exporter sees it)"] + volume_warnings(material)
@@ -460,9 +511,10 @@ def scene_warnings(depsgraph):
 def export(scene, path):
     """Writes `scene` with its animation to `path` (.gltf) with Caustic's extras; returns the
     seconds it took."""
-    global _exporting, _world
+    global _exporting, _world, _holdouts
     start = time.perf_counter()
     _world = world_extras(scene.world, pathlib.Path(path).parent)
+    _holdouts = holdout_objects(bpy.context.view_layer)
     # One timeline sampled once a frame (LINEAR keys); no KHR_animation_pointer (the renderer
     # cannot read it).
     options = dict(filepath=str(path), export_format='GLTF_SEPARATE', export_cameras=True, export_lights=True,
@@ -481,7 +533,7 @@ def export(scene, path):
         for light in warm:
             light.use_temperature = True
         _temperatures.clear()
-        _exporting, _world = False, None
+        _exporting, _world, _holdouts = False, None, set()
     if result != {'FINISHED'}:
         raise RuntimeError(f"Blender's glTF exporter did not finish ({result})")
     return time.perf_counter() - start

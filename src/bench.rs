@@ -6,7 +6,7 @@ use std::path::Path;
 use std::time::Instant;
 
 use crate::film::{Film, FilmMode};
-use crate::frames::{self, load_description, RenderReport, RenderSettings, Shot};
+use crate::frames::{self, add_estimates, load_description, RenderReport, RenderSettings, Shot};
 use crate::memory;
 use crate::sppm::{PassStats, Renderer};
 use rayon::prelude::*;
@@ -175,8 +175,7 @@ fn time_passes(renderer: &Renderer, passes: std::ops::Range<u64>) -> (PassStats,
     for i in passes {
         let (samples, estimates, pass_stats) = renderer.run_pass(i);
         let added = Instant::now();
-        let sums = estimates.iter().map(|e| (e.radiance, e.laplacian));
-        film.add_pass(&samples.wavelengths, samples.radius, sums);
+        add_estimates(&mut film, &samples, &estimates);
         accumulation_s += added.elapsed().as_secs_f64();
         stats = stats + pass_stats;
     }

@@ -109,6 +109,10 @@ pub struct RenderArgs {
     /// Image size WxH (default: the scene's, else 640 wide at the camera's aspect).
     #[arg(long, value_name = "WxH", value_parser = parse_resolution)]
     resolution: Option<[u32; 2]>,
+    /// Render only the window X,Y,W,H of the image (pixels from the top-left; Blender's render
+    /// region): the EXR is W x H and its pixels are those of the whole image's render.
+    #[arg(long, value_name = "X,Y,W,H", value_parser = parse_crop)]
+    crop: Option<[u32; 4]>,
     /// Random seed: the same seed gives the same image with any thread count.
     #[arg(long, value_name = "S", default_value_t = 1)]
     seed: u64,
@@ -288,6 +292,16 @@ fn unit_interval(s: &str) -> Result<f64, String> {
     parse_checked(s, |&v: &f64| v > 0.0 && v < 1.0, "a number strictly between 0 and 1")
 }
 
+fn parse_crop(s: &str) -> Result<[u32; 4], String> {
+    let numbers: Vec<u32> = s.split(',').map(|n| n.trim().parse::<u32>()).collect::<Result<_, _>>().map_err(|_| {
+        format!("expected X,Y,W,H in whole pixels (such as 10,20,64,48), got '{s}'")
+    })?;
+    match numbers[..] {
+        [x, y, w, h] if w > 0 && h > 0 => Ok([x, y, w, h]),
+        _ => Err(format!("expected X,Y,W,H with a width and height of 1 or more, got '{s}'")),
+    }
+}
+
 fn parse_resolution(s: &str) -> Result<[u32; 2], String> {
     let parsed =
         s.split_once(['x', 'X']).and_then(|(w, h)| Some([w.parse::<u32>().ok()?, h.parse::<u32>().ok()?]));
@@ -308,6 +322,7 @@ impl RenderArgs {
             alpha: self.alpha,
             radius: self.radius,
             resolution: self.resolution,
+            crop: self.crop,
             seed: self.seed,
             progress: self.progress,
             wavelength_nm: self.wavelength,

@@ -2,7 +2,8 @@
 //!
 //! A pixel keeps only sums: of the pass estimates converted to XYZ (the mean over the pass's four
 //! wavelengths of `L cmf(lambda) / p(lambda)`),
-//! of the square of their luminance, of the Laplacian term's luminance, and the pass count.
+//! of the square of their luminance, of the Laplacian term's luminance, of the coverage (alpha:
+//! 0 where the camera sees through a transparent film or sees a holdout), and the pass count.
 //! Two films of disjoint pass ranges therefore merge exactly by adding. The image is the mean,
 //! white-balanced (below), XYZ to linear Rec.709, written as one part with `Combined.R/G/B/A`
 //! (what Blender's render result reads), to a temporary file that is renamed into place when
@@ -77,7 +78,7 @@ pub fn display_xyz(lambda_nm: f32) -> DVec3 {
 }
 
 /// The f64 numbers one pixel's sums are stored as (see [`Film::pixel_sums`]).
-pub const PIXEL_SUMS: usize = 7;
+pub const PIXEL_SUMS: usize = 8;
 
 /// One pixel's running sums over passes.
 #[derive(Clone, Copy, Debug, Default, PartialEq)]
@@ -92,6 +93,8 @@ pub struct PixelSums {
     /// Sum over passes of r_i^2 times the luminance of the pass's Laplacian estimate (the bias
     /// term of the error bound, see `crate::error`).
     pub laplacian_y: f64,
+    /// Sum of the coverage estimates (the alpha channel is their mean).
+    pub coverage: f64,
     /// Number of passes summed.
     pub passes: u64,
 }
@@ -156,6 +159,7 @@ impl Film {
             a.y_squared += b.y_squared;
             a.y_white += b.y_white;
             a.laplacian_y += b.laplacian_y;
+            a.coverage += b.coverage;
             a.passes += b.passes;
         }
         for (a, b) in self.bins.sums.iter_mut().zip(&other.bins.sums) {
@@ -171,7 +175,7 @@ impl Film {
     /// Every per-pixel sum as an f64, pixel by pixel (`PIXEL_SUMS` each), then the spectral bands.
     pub fn pixel_sums(&self) -> Vec<f64> {
         let per_pixel = self.pixels.iter().flat_map(|p| {
-            [p.xyz.x, p.xyz.y, p.xyz.z, p.y_squared, p.y_white, p.laplacian_y, p.passes as f64]
+            [p.xyz.x, p.xyz.y, p.xyz.z, p.y_squared, p.y_white, p.laplacian_y, p.coverage, p.passes as f64]
         });
         per_pixel.chain(self.bins.sums.iter().copied()).collect()
     }
@@ -188,20 +192,21 @@ impl Film {
                 y_squared: s[3],
                 y_white: s[4],
                 laplacian_y: s[5],
-                passes: s[6] as u64,
+                coverage: s[6],
+                passes: s[7] as u64,
             };
         }
         self.bins.sums.copy_from_slice(&sums[pixel_part..]);
         Some(())
     }
 
-    /// Adds one pass of gather radius `radius`: `radiance[i]` and `laplacian[i]` at the
-    /// wavelengths `lambda` (each lane sampled with its density).
+    /// Adds one pass of gather radius `radius`: each pixel's radiance, Laplacian term (at the
+    /// wavelengths `lambda`, each lane sampled with its density) and coverage.
     pub fn add_pass(
         &mut self,
         lambda: &Wavelengths,
         radius: f32,
-        estimates: impl Iterator<Item = (SampledSpectrum, SampledSpectrum)>,
+        estimates: impl Iterator<Item = (SampledSpectrum, SampledSpectrum, f32)>,
     ) {
         let radius2 = f64::from(radius) * f64::from(radius);
         // Each lane's XYZ per unit radiance: the estimate is the mean over lanes.
@@ -228,7 +233,7 @@ impl Film {
         let bands = (self.bins.count > 0).then(|| lambda.nm.to_array().map(|l| self.bins.band(l)));
         let band_weights =
             lambda.pdf.to_array().map(|p| 1.0 / (f64::from(p) * self.bins.width_nm() * LANES as f64));
-        for (i, (sums, (radiance, laplacian))) in self.pixels.iter_mut().zip(estimates).enumerate() {
+        for (i, (sums, (radiance, laplacian, coverage))) in self.pixels.iter_mut().zip(estimates).enumerate() {
             // A non-finite estimate would poison the pixel's sums for good: count it as zero and
             // report it, so the image stays usable and the problem is not silent.
             let (radiance, laplacian) = if radiance.is_finite() && laplacian.is_finite() {
@@ -242,6 +247,7 @@ impl Film {
             sums.y_squared += xyz.y * xyz.y;
             sums.y_white += xyz.y * white_y;
             sums.laplacian_y += radius2 * lanes_xyz(laplacian).y;
+            sums.coverage += f64::from(coverage);
             sums.passes += 1;
             if let Some(bands) = bands {
                 let pixel_bins = &mut self.bins.sums[i * self.bins.count..][..self.bins.count];
@@ -283,6 +289,11 @@ impl Film {
             .collect()
     }
 
+    /// The mean coverage (alpha) of every pixel (1 before any pass).
+    pub fn alpha(&self) -> Vec<f32> {
+        self.pixels.iter().map(|s| if s.passes == 0 { 1.0 } else { (s.coverage / s.passes as f64) as f32 }).collect()
+    }
+
     /// Writes the image, with `extra` channels (name, one value per pixel), to `path` through a
     /// temporary file beside it.
     pub fn write_exr(&self, path: &Path, extra: &[(&str, Vec<f32>)]) -> std::result::Result<(), String> {
@@ -294,7 +305,7 @@ impl Film {
             channel("Combined.R", component(0)),
             channel("Combined.G", component(1)),
             channel("Combined.B", component(2)),
-            channel("Combined.A", vec![1.0; w * h]),
+            channel("Combined.A", self.alpha()),
         ];
         for (name, values) in extra {
             list.push(channel(name, values.clone()));
@@ -325,7 +336,7 @@ mod tests {
         for i in 0..passes {
             let lambda = Wavelengths::sampled(pass_sample(5, i));
             let pixel =
-                (SampledSpectrum::from_array(lambda.nm.to_array().map(&radiance)), SampledSpectrum::ZERO);
+                (SampledSpectrum::from_array(lambda.nm.to_array().map(&radiance)), SampledSpectrum::ZERO, 1.0);
             film.add_pass(&lambda, 0.1, [pixel, pixel].into_iter());
         }
         film
@@ -347,7 +358,7 @@ mod tests {
             film.add_pass(
                 &Wavelengths::single(lambda, 1.0),
                 0.1,
-                [(white, SampledSpectrum::ZERO)].into_iter(),
+                [(white, SampledSpectrum::ZERO, 1.0)].into_iter(),
             );
             let rgb = film.rgb()[0];
             let luminance = 0.2126 * rgb.x + 0.7152 * rgb.y + 0.0722 * rgb.z;
@@ -367,7 +378,7 @@ mod tests {
         let mut film = Film::new(1, 1, FilmMode::Spectral, 47);
         for i in 0..10_000 {
             let lambda = Wavelengths::sampled(pass_sample(9, i));
-            film.add_pass(&lambda, 0.1, [(SampledSpectrum::splat(2.0), SampledSpectrum::ZERO)].into_iter());
+            film.add_pass(&lambda, 0.1, [(SampledSpectrum::splat(2.0), SampledSpectrum::ZERO, 1.0)].into_iter());
         }
         let bands: Vec<f64> = film.bins.sums.iter().map(|s| s / film.passes as f64).collect();
         // A flat spectrum of 2 per nm: every 10 nm band averages 2.

@@ -21,7 +21,7 @@ use crate::sampling::pass_time_sample;
 use crate::scene::description::{LensSettings, Shutter};
 use crate::scene::pose::lens;
 use crate::scene::{Description, Prepared, Scene, TimeRange, DEFAULT_RADIUS_FRACTION};
-use crate::sppm::{run_shared_pass, PassSamples, PassStats, PixelEstimate, Renderer, SppmSettings};
+use crate::sppm::{run_shared_pass, Crop, PassSamples, PassStats, PixelEstimate, Renderer, SppmSettings};
 
 /// Set when the user asks the render to stop (Ctrl-C, SIGTERM): the pass in flight finishes,
 /// frames not yet written are dropped, and the render ends with an error naming what was kept.
@@ -68,6 +68,8 @@ pub struct RenderSettings {
     pub radius: Option<f64>,
     /// Resolution override.
     pub resolution: Option<[u32; 2]>,
+    /// The window `[x, y, width, height]` of the image to render (all of it when `None`).
+    pub crop: Option<[u32; 4]>,
     /// Random seed.
     pub seed: u64,
     /// Progress display.
@@ -107,6 +109,7 @@ impl RenderSettings {
             alpha: 2.0 / 3.0,
             radius: None,
             resolution: None,
+            crop: None,
             seed: 1,
             progress: ProgressStyle::None,
             wavelength_nm: None,
@@ -230,6 +233,18 @@ const BYTES_PER_PIXEL: u64 = 256;
 const MAX_IMAGE_BYTES: u64 = 16 << 30;
 
 /// Refuses resolutions whose buffers would not fit in memory, before anything is allocated.
+/// The window of the image a render covers: `--crop`, which must lie inside the image, or the whole.
+fn crop(window: Option<[u32; 4]>, image: [u32; 2]) -> Result<Crop, String> {
+    let Some([x, y, w, h]) = window else { return Ok(Crop::whole(image)) };
+    if u64::from(x) + u64::from(w) > u64::from(image[0]) || u64::from(y) + u64::from(h) > u64::from(image[1]) {
+        return Err(format!(
+            "--crop {x},{y},{w},{h} reaches beyond the {}x{} image (x + width and y + height must fit)",
+            image[0], image[1]
+        ));
+    }
+    Ok(Crop { image, origin: [x, y], size: [w, h] })
+}
+
 fn check_resolution([width, height]: [u32; 2]) -> Result<(), String> {
     let bytes = u64::from(width) * u64::from(height) * BYTES_PER_PIXEL;
     if bytes > MAX_IMAGE_BYTES {
@@ -266,6 +281,7 @@ fn fingerprint(
         prepared.lens().map(|l| [l.aperture_radius, l.focus_distance, l.blades as f32, l.blade_rotation]);
     serde_json::json!({
         "resolution": [sppm.width, sppm.height],
+        "crop": [sppm.crop.image, sppm.crop.origin],
         "photons_per_pass": sppm.photons_per_pass,
         "alpha": sppm.alpha,
         "initial_radius": sppm.initial_radius,
@@ -291,8 +307,10 @@ pub struct Shot {
 impl Shot {
     /// Prepares `description` for the frames and settings of `settings`.
     pub fn new(settings: &RenderSettings, description: Description) -> Result<Self, String> {
-        let [width, height] = resolution(settings, &description);
-        check_resolution([width, height])?;
+        let [full_width, full_height] = resolution(settings, &description);
+        check_resolution([full_width, full_height])?;
+        let crop = crop(settings.crop, [full_width, full_height])?;
+        let [width, height] = crop.size;
         let shutter = shutter(settings, &description);
         let range = time_range(&settings.frames, shutter, description.fps);
         let lens_settings = lens_settings(settings, &description);
@@ -306,10 +324,11 @@ impl Shot {
         let prepared = Prepared::with_lens(Arc::new(description), range, lens);
         let fixed_bvh = Arc::new(prepared.fixed_bvh());
         let first = prepared.pose(range.start);
-        let photons_per_pass = settings.photons.unwrap_or((width * height) as usize);
+        let photons_per_pass = settings.photons.unwrap_or((full_width * full_height) as usize);
         let sppm = SppmSettings {
             width,
             height,
+            crop,
             photons_per_pass,
             alpha: settings.alpha,
             initial_radius: settings.radius.unwrap_or_else(|| default_radius(&first, photons_per_pass)),
@@ -575,9 +594,14 @@ fn add_pass(
     estimates: &[PixelEstimate],
     stats: PassStats,
 ) {
-    let sums = estimates.iter().map(|e| (e.radiance, e.laplacian));
-    frame.film.add_pass(&samples.wavelengths, samples.radius, sums);
+    add_estimates(&mut frame.film, samples, estimates);
     frame.stats = frame.stats + stats;
+}
+
+/// Adds one pass's pixel estimates to a film.
+pub fn add_estimates(film: &mut Film, samples: &PassSamples, estimates: &[PixelEstimate]) {
+    let sums = estimates.iter().map(|e| (e.radiance, e.laplacian, e.coverage));
+    film.add_pass(&samples.wavelengths, samples.radius, sums);
 }
 
 /// Writes a frame's EXR with its error passes (the bound and the variance of the mean).

@@ -91,7 +91,7 @@ pub fn scene_sha256(path: &Path) -> Result<String, String> {
 pub fn write(path: &Path, header: &PartialHeader, film: &Film) -> Result<(), String> {
     let fail = |e: std::io::Error| format!("cannot write {}: {e}", path.display());
     let json = serde_json::to_vec(header).expect("a header serialises");
-    let mut bytes = Vec::with_capacity(MAGIC.len() + 8 + json.len() + film.pixels.len() * 56);
+    let mut bytes = Vec::with_capacity(MAGIC.len() + 8 + json.len() + film.pixels.len() * 8 * crate::film::PIXEL_SUMS);
     bytes.extend_from_slice(MAGIC);
     bytes.extend_from_slice(&(json.len() as u64).to_le_bytes());
     bytes.extend_from_slice(&json);

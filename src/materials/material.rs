@@ -79,6 +79,10 @@ pub struct Material {
     /// fills the overlap (the `caustic` extras' `priority`; equal priorities: the one entered
     /// last).
     pub priority: i32,
+    /// Where the camera sees it (directly, or through surfaces alpha cuts away), the pixel is
+    /// transparent and black: Blender's holdout (the Holdout shader, or an object in a holdout
+    /// collection). Elsewhere it renders as its other fields say.
+    pub holdout: bool,
 }
 
 /// What a path meets at a surface point: a BSDF in its frame, and the factor on the path's
@@ -224,6 +228,7 @@ impl Material {
             sheen: None,
             volume: None,
             priority: 0,
+            holdout: false,
         }
     }
 

@@ -115,6 +115,8 @@ pub struct Description {
     pub world: Option<World>,
     /// Resolution from the extras.
     pub resolution: Option<[u32; 2]>,
+    /// The film is transparent where the camera sees the world (Blender's Film > Transparent).
+    pub transparent_film: bool,
     /// Frames per second (the extras' `fps`, 24 when absent).
     pub fps: f32,
     /// The shutter from the extras.

@@ -26,6 +26,10 @@ pub struct SceneExtras {
     pub fps: Option<f32>,
     /// The motion-blur shutter (absent: no motion blur).
     pub shutter: Option<ShutterExtras>,
+    /// The film is transparent where the camera sees the world directly (Blender's Film >
+    /// Transparent): the world lights the scene but is not seen, and alpha is 0 there.
+    #[serde(default)]
+    pub transparent_film: bool,
     /// The name of the camera's node to render through (absent: the first camera).
     pub camera: Option<String>,
 }
@@ -127,6 +131,10 @@ pub struct NodeExtras {
     /// The node's camera's lens shift, in film heights (Blender's shift times the side the
     /// sensor fits, over the height).
     pub shift: Option<[f32; 2]>,
+    /// The node's mesh is a holdout (an object in a holdout collection): a hole in the film where
+    /// the camera sees it, rendered as its materials say everywhere else.
+    #[serde(default)]
+    pub holdout: bool,
     /// The node is Blender's equirectangular panoramic camera (glTF has none).
     pub panorama: Option<PanoramaExtras>,
 }
@@ -148,6 +156,10 @@ pub struct MaterialExtras {
     /// Where its volume overlaps another's (water meeting its glass), the volume of highest
     /// priority fills the overlap (0 when not given).
     pub priority: Option<i32>,
+    /// The material is Blender's Holdout shader: black, and a hole in the film where the camera
+    /// sees it.
+    #[serde(default)]
+    pub holdout: bool,
 }
 
 /// Sellmeier coefficients: `n^2 = 1 + sum b_k l^2 / (l^2 - c_k)`, l in micrometres.

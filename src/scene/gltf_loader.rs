@@ -49,6 +49,8 @@ struct Builder<'a> {
     material_offset: u32,
     /// The thin-wall copy of each transmissive material that open meshes use.
     thin_materials: std::collections::HashMap<u32, u32>,
+    /// The holdout copy of each material that has one.
+    holdout_materials: std::collections::HashMap<u32, u32>,
 }
 
 /// Loads `path` into a [`Description`].
@@ -93,6 +95,7 @@ pub fn load(path: &Path) -> Result<Description, SceneError> {
         warnings: unrendered,
         material_offset,
         thin_materials: Default::default(),
+        holdout_materials: Default::default(),
     };
     for node in gltf_scene.nodes() {
         builder.visit(&node, &rig).map_err(fail)?;
@@ -117,6 +120,7 @@ pub fn load(path: &Path) -> Result<Description, SceneError> {
         materials: builder.materials,
         world,
         resolution: scene_extras.resolution,
+        transparent_film: scene_extras.transparent_film,
         fps,
         shutter,
         warnings: unique(builder.warnings),
@@ -310,7 +314,11 @@ impl Builder<'_> {
         self.warnings.extend(gltf_unrendered::node_warnings(node));
         if let Some(mesh) = node.mesh() {
             self.warnings.extend(gltf_unrendered::mesh_warnings(&mesh));
+            let first_instance = self.meshes.len();
             self.add_mesh(&mesh, node.index())?;
+            if extras.holdout {
+                self.hold_out(first_instance);
+            }
         }
         if let Some(camera) = node.camera() {
             self.add_camera(Some(&camera), node.index(), name, &extras)?;
@@ -534,6 +542,32 @@ impl Builder<'_> {
         self.warnings.push(format!(
             "mesh '{name}': its glass is an open surface, rendered as a thin wall (no refraction); close the mesh for solid glass"
         ));
+    }
+
+    /// Makes the mesh instances from `first` on holdouts: each triangle gets its material's
+    /// holdout copy.
+    fn hold_out(&mut self, first: usize) {
+        for i in first..self.meshes.len() {
+            for t in 0..self.meshes[i].triangles.len() {
+                let material = self.meshes[i].triangles[t].material;
+                self.meshes[i].triangles[t].material = self.holdout_material(material);
+            }
+        }
+    }
+
+    /// The holdout copy of `material`.
+    fn holdout_material(&mut self, material: u32) -> u32 {
+        if self.materials[material as usize].holdout {
+            return material;
+        }
+        if let Some(&copy) = self.holdout_materials.get(&material) {
+            return copy;
+        }
+        let copy = Material { holdout: true, ..self.materials[material as usize].clone() };
+        self.materials.push(copy);
+        let index = self.materials.len() as u32 - 1;
+        self.holdout_materials.insert(material, index);
+        index
     }
 
     /// The thin-wall copy of `material`.

@@ -70,6 +70,11 @@ pub fn material(
         extras::parse(m.extras()).map_err(|e| in_material(format!("extras `caustic`: {e}")))?;
     let volume = volume(m).map_err(in_material)?;
     let ior = dispersion_law(m, &extras).map_err(in_material)?;
+    if extras.holdout {
+        // Blender's Holdout shader: black wherever it is not a hole in the film.
+        let black = BaseColour::Constant(RgbSpectrum::constant(0.0));
+        return Ok(Material { name, holdout: true, base_colour: black, ..Material::default_grey() });
+    }
     Ok(Material {
         ior,
         volume,
@@ -89,6 +94,7 @@ pub fn material(
         emission: (emission.max_element() > 0.0).then(|| RgbSpectrum::illuminant(emission)),
         emits_both_sides: true,
         thin: false,
+        holdout: false,
     })
 }
 

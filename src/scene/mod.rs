@@ -146,6 +146,8 @@ pub struct Scene {
     pub resolution: Option<[u32; 2]>,
     /// The camera's aspect ratio (width / height), if the file gives one.
     pub aspect_ratio: Option<f32>,
+    /// The film is transparent where the camera sees the world.
+    pub transparent_film: bool,
 }
 
 /// The entry of `Scene::triangle_lights` for triangles that emit nothing.

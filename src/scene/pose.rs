@@ -298,6 +298,7 @@ impl Prepared {
             camera: Camera::from_node(camera_world, d.camera.projection, d.camera.shift).with_lens(self.lens),
             resolution: d.resolution,
             aspect_ratio: d.camera.aspect_ratio,
+            transparent_film: d.transparent_film,
         }
     }
 }

@@ -181,7 +181,7 @@ impl PhotonSet {
     /// the point (looked up once for the sum).
     pub fn estimate(&self, eye: &EyeResult, mut sums: PhotonSums) -> PixelEstimate {
         let Some(vp) = eye.point else {
-            return PixelEstimate { radiance: eye.radiance, laplacian: SampledSpectrum::ZERO };
+            return PixelEstimate { radiance: eye.radiance, laplacian: SampledSpectrum::ZERO, coverage: eye.coverage };
         };
         if sums.kernel != SampledSpectrum::ZERO {
             let radius = self.kernel.r2.sqrt();
@@ -191,6 +191,7 @@ impl PhotonSet {
         PixelEstimate {
             radiance: eye.radiance + vp.beta * sums.kernel / sums.kernel_mass_within(),
             laplacian: vp.beta * sums.laplacian,
+            coverage: eye.coverage,
         }
     }
 

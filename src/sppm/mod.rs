@@ -17,5 +17,5 @@ mod shared;
 mod visible;
 
 pub use photons::Photon;
-pub use renderer::{PassSamples, PassStats, PixelEstimate, Renderer, SppmSettings, VisiblePoint, MAX_DEPTH};
+pub use renderer::{Crop, PassSamples, PassStats, PixelEstimate, Renderer, SppmSettings, VisiblePoint, MAX_DEPTH};
 pub use shared::{run_shared_pass, SharedPassOutput};

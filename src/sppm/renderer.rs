@@ -68,12 +68,40 @@ impl VisiblePoint {
 // `ShadingFrame`).
 const _: () = assert!(std::mem::size_of::<VisiblePoint>() <= 144);
 
+/// The window of the image a film covers (all of it, or Blender's render region): pixel
+/// `(x, y)` of the film is pixel `origin + (x, y)` of the image, with that pixel's samples.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Crop {
+    /// The whole image's size.
+    pub image: [u32; 2],
+    /// The film's top-left pixel in the image.
+    pub origin: [u32; 2],
+    /// The film's size.
+    pub size: [u32; 2],
+}
+
+impl Crop {
+    /// All of an image of `size`.
+    pub fn whole(size: [u32; 2]) -> Self {
+        Crop { image: size, origin: [0, 0], size }
+    }
+
+    /// The image pixel (x, y) of film pixel `pixel` (row-major), and its index in the image.
+    pub fn image_pixel(&self, pixel: usize) -> ([u32; 2], u64) {
+        let width = self.size[0] as usize;
+        let (x, y) = ((pixel % width) as u32 + self.origin[0], (pixel / width) as u32 + self.origin[1]);
+        ([x, y], u64::from(y) * u64::from(self.image[0]) + u64::from(x))
+    }
+}
+
 /// Settings of the SPPM passes.
 #[derive(Clone, Debug)]
 pub struct SppmSettings {
-    /// Image width in pixels.
+    /// The window of the image the film covers.
+    pub crop: Crop,
+    /// Film width in pixels (the crop's).
     pub width: u32,
-    /// Image height in pixels.
+    /// Film height in pixels (the crop's).
     pub height: u32,
     /// Photon paths traced per pass.
     pub photons_per_pass: usize,
@@ -118,6 +146,8 @@ pub struct PixelEstimate {
     pub radiance: SampledSpectrum,
     /// The same estimate with the kernel's Laplacian in place of the kernel (for the bias term).
     pub laplacian: SampledSpectrum,
+    /// The eye path's coverage of the film (alpha), 0 or 1.
+    pub coverage: f32,
 }
 
 /// Counts of the work a pass did, for the benchmark.

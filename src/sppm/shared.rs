@@ -340,5 +340,5 @@ fn frame_eye(frame: &Renderer, pass: &PassSamples, record: &EyeRecord) -> (EyeRe
         }
     });
     let radiance = with_direct(end.radiance_before, vp.beta, values);
-    (EyeResult { radiance, point: end.result.point }, false, stats)
+    (EyeResult { radiance, ..end.result }, false, stats)
 }

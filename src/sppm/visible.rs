@@ -40,6 +40,9 @@ pub struct EyeResult {
     pub radiance: SampledSpectrum,
     /// Where photons are gathered.
     pub point: Option<VisiblePoint>,
+    /// How much of the film the path covers: 0 where the camera sees through to a transparent
+    /// film's world or sees a holdout, else 1 (the pixel's alpha is its mean).
+    pub coverage: f32,
 }
 
 /// An eye path about to trace its next segment.
@@ -62,6 +65,9 @@ pub struct EyeState {
     pub depth: u32,
     /// The vertex this segment leaves took direct light: emission it meets is already counted.
     pub lights_sampled: bool,
+    /// The path is still the camera's ray: it has passed only surfaces alpha cuts away (what it
+    /// meets is seen directly: a holdout, or a transparent film's world, is a hole in the film).
+    pub camera_ray: bool,
     /// The path's random stream, where this segment leaves it.
     pub rng: PixelSampler,
 }
@@ -82,12 +88,12 @@ pub struct EyeEnd {
 pub fn start_eye_path(renderer: &Renderer, pass: &PassSamples, pixel: usize) -> (EyeState, PassStats) {
     let settings = &renderer.settings;
     let camera = &renderer.scene.camera;
-    let mut rng = pixel_stream(settings.seed, pass.index, pixel as u64);
-    let (width, height) = (settings.width as usize, settings.height as usize);
-    let film = (Vec2::new((pixel % width) as f32, (pixel / width) as f32) + rng.next_2d())
-        / Vec2::new(width as f32, height as f32);
+    let ([x, y], index) = settings.crop.image_pixel(pixel);
+    let mut rng = pixel_stream(settings.seed, pass.index, index);
+    let [width, height] = settings.crop.image.map(|n| n as f32);
+    let film = (Vec2::new(x as f32, y as f32) + rng.next_2d()) / Vec2::new(width, height);
     let mut stats = PassStats::default();
-    let aspect = width as f32 / height as f32;
+    let aspect = width / height;
     let (origin, direction) = match camera.lens {
         Some(_) => {
             stats.lens_samples += 1;
@@ -105,6 +111,7 @@ pub fn start_eye_path(renderer: &Renderer, pass: &PassSamples, pixel: usize) -> 
             radiance: SampledSpectrum::ZERO,
             depth: 0,
             lights_sampled: false,
+            camera_ray: true,
             rng,
         },
         stats,
@@ -141,6 +148,7 @@ pub fn continue_eye_path(
     let mut point = None;
     let mut direct = [DirectTerm::ZERO; 2];
     let mut radiance_before = SampledSpectrum::ZERO;
+    let mut coverage = 1.0;
     while state.depth < MAX_DEPTH {
         stats.eye_rays += 1;
         let hit = renderer.accel.intersect(state.origin.into(), state.direction.into(), f32::INFINITY);
@@ -151,7 +159,9 @@ pub fn continue_eye_path(
                 state.media.transmittance(scene, &pass.wavelengths, length).unwrap_or(SampledSpectrum::ONE);
         }
         let Some(hit) = hit else {
-            if !state.lights_sampled {
+            if state.camera_ray && scene.transparent_film {
+                coverage = 0.0;
+            } else if !state.lights_sampled {
                 state.radiance +=
                     state.beta * scene.escaped_radiance(state.direction.into(), &pass.wavelengths);
             }
@@ -160,7 +170,8 @@ pub fn continue_eye_path(
         let surface = scene.surface(&hit, &pass.wavelengths);
         let material = &scene.materials[surface.material as usize];
         let wo = -Vec3::from(state.direction);
-        if !state.lights_sampled {
+        // A holdout the camera sees shows nothing, its emission neither.
+        if !state.lights_sampled && !(state.camera_ray && material.holdout) {
             state.radiance +=
                 state.beta * material.emitted(&surface.inputs, &pass.wavelengths, surface.frame.ng(), wo);
         }
@@ -177,6 +188,11 @@ pub fn continue_eye_path(
             state.depth += 1;
             continue;
         }
+        if state.camera_ray && material.holdout {
+            coverage = 0.0;
+            break;
+        }
+        state.camera_ray = false;
         state.beta *= weight;
         let vertex =
             VisiblePoint::new(surface.p, frame, wo, bsdf, state.beta, state.hero_only, surface.scale);
@@ -217,7 +233,7 @@ pub fn continue_eye_path(
         state.direction = sample.wi.into();
         state.depth += 1;
     }
-    let result = EyeResult { radiance: state.radiance, point };
+    let result = EyeResult { radiance: state.radiance, point, coverage };
     (EyeEnd { result, radiance_before, direct }, stats)
 }
 

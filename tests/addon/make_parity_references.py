@@ -7,7 +7,8 @@ Cycles on the CPU, the scene's 64x64, a 1-pixel box filter, no denoising, no ada
 no glossy filter, no clamping (Blender's default clamps indirect samples at 10, which darkens
 caustics: light under a clear glass block read 19% of Cycles' own unclamped value), 32 bounces of
 every kind; each EXR holds `Combined.R/G/B` and `Index.X` (the
-object-index pass: which object each pixel sees).
+object-index pass: which object each pixel sees), and for the scenes of parity_scenes.ALPHA
+`Alpha.X` (Cycles' alpha).
 """
 import argparse
 import datetime
@@ -50,7 +51,7 @@ def render_cycles(samples, path):
     channels = {k: v for part in OpenEXR.File(str(path)).parts for k, v in part.channels.items()}
     combined = next(v for k, v in channels.items() if k.endswith("Combined"))
     index = next(v for k, v in channels.items() if k.endswith("Object Index.X"))
-    return combined.pixels[..., :3], index.pixels.reshape(combined.pixels.shape[:2])
+    return combined.pixels[..., :3], combined.pixels[..., 3], index.pixels.reshape(combined.pixels.shape[:2])
 
 
 def main():
@@ -64,8 +65,10 @@ def main():
     for name in args.scenes:
         parity_scenes.SCENES[name]()
         with tempfile.TemporaryDirectory() as tmp:
-            rgb, index = render_cycles(args.samples, pathlib.Path(tmp) / "cycles.exr")
+            rgb, alpha, index = render_cycles(args.samples, pathlib.Path(tmp) / "cycles.exr")
         channels = {"Combined": rgb.astype(np.float32), "Index.X": index.astype(np.float32)}
+        if name in parity_scenes.ALPHA:
+            channels["Alpha.X"] = alpha.astype(np.float32)
         OpenEXR.File({"compression": OpenEXR.ZIP_COMPRESSION}, channels).write(str(OUT / f"{name}.exr"))
         provenance[name] = {
             "renderer": f"Cycles (bpy {bpy.app.version_string}), CPU",

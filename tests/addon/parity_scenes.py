@@ -33,11 +33,12 @@ def interior(index, value):
 
 
 def clear():
-    for collection in (bpy.data.objects, bpy.data.meshes, bpy.data.materials, bpy.data.lights, bpy.data.cameras,
-                       bpy.data.images, bpy.data.worlds):
-        for block in list(collection):
-            collection.remove(block)
+    for blocks in (bpy.data.objects, bpy.data.meshes, bpy.data.materials, bpy.data.lights, bpy.data.cameras,
+                   bpy.data.images, bpy.data.worlds, bpy.data.collections):
+        for block in list(blocks):
+            blocks.remove(block)
     scene = bpy.context.scene
+    scene.render.film_transparent = False
     scene.render.resolution_x = scene.render.resolution_y = SIZE
     scene.render.resolution_percentage = 100
     scene.render.use_motion_blur = False
@@ -468,6 +469,63 @@ def panorama_camera():
     return {"World": 0}
 
 
+def collection(name, *objects, parent=None):
+    """A new collection (under the scene's, or `parent`) holding `objects` (moved out of the
+    scene's collection)."""
+    new = bpy.data.collections.new(name)
+    (parent or bpy.context.scene.collection).children.link(new)
+    for obj in objects:
+        for old in list(obj.users_collection):
+            old.objects.unlink(obj)
+        new.objects.link(obj)
+    return new
+
+
+def layer_collection(name):
+    """The view layer's entry of the collection `name`."""
+    def find(layer):
+        if layer.collection.name == name:
+            return layer
+        return next((found for child in layer.children if (found := find(child)) is not None), None)
+    return find(bpy.context.view_layer.layer_collection)
+
+
+def film_and_holdouts():
+    """A transparent film over a floor that ends in view, a grey ball, a ball of Blender's Holdout
+    shader, a cube in a collection set to Holdout in the view layer, and a red cube in a collection
+    excluded from the view layer (which must not render), under a soft area light."""
+    clear()
+    bpy.context.scene.render.film_transparent = True
+    world((0.3, 0.35, 0.4))
+    add(bpy.ops.mesh.primitive_plane_add, principled("Floor", Base_Color=(0.5, 0.5, 0.5, 1.0)), index=1, size=6)
+    area_light((2.0, -2.0, 4.0), (0.0, 0.0, 0.0), 2.0, 300.0)
+    add(bpy.ops.mesh.primitive_uv_sphere_add, principled("Grey", Base_Color=(0.6, 0.6, 0.6, 1.0)), index=2,
+        segments=48, ring_count=24, radius=0.6, location=(-1.3, 0.0, 0.6))
+    bpy.ops.object.shade_smooth()
+    holdout = bpy.data.materials.new("Holdout")
+    nodes = holdout.node_tree.nodes
+    nodes.remove(nodes["Principled BSDF"])
+    holdout.node_tree.links.new(nodes.new("ShaderNodeHoldout").outputs[0], nodes["Material Output"].inputs["Surface"])
+    add(bpy.ops.mesh.primitive_uv_sphere_add, holdout, index=3, segments=48, ring_count=24, radius=0.6,
+        location=(0.0, 0.5, 0.6))
+    bpy.ops.object.shade_smooth()
+    masked = add(bpy.ops.mesh.primitive_cube_add, principled("Masked", Base_Color=(0.2, 0.6, 0.2, 1.0)), index=4,
+                 size=1.0, location=(1.3, 0.0, 0.5))
+    collection("Mask", masked)
+    layer_collection("Mask").holdout = True
+    excluded = add(bpy.ops.mesh.primitive_cube_add, principled("Excluded", Base_Color=(0.9, 0.1, 0.1, 1.0)),
+                   index=5, size=0.8, location=(0.0, -1.5, 0.4))
+    collection("Excluded", excluded)
+    layer_collection("Excluded").exclude = True
+    camera((0.0, -7.0, 2.5), (0.0, 0.0, 0.6))
+    return {"Floor": 1, "Grey": 2}
+
+
+# Scenes whose alpha (a transparent film, holdouts) must match Cycles': a mean absolute difference
+# under 0.02 over the image and no pixel's over 0.25 (noise is under 0.1 at these sample counts;
+# an object that should not render shows).
+ALPHA = {"film_and_holdouts"}
+
 # Scenes whose dark silhouettes (pixels under half the world's brightness) must match Cycles' within a pixel.
 SILHOUETTES = {"ortho_camera", "shifted_camera", "panorama_camera"}
 
@@ -487,4 +545,4 @@ COLOURS = {"glass": {"Tinted light": 0.03}, "warm_light": {"Floor": 0.03, "Grey"
 SCENES = {"glass": glass, "principled_spheres": principled_spheres, "textured": textured, "normal_mapped": normal_mapped,
           "coated": coated, "sheen": sheen, "leaf": leaf, "warm_light": warm_light, "soft_light": soft_light,
           "hdri": hdri, "ortho_camera": ortho_camera, "shifted_camera": shifted_camera,
-          "panorama_camera": panorama_camera}
+          "panorama_camera": panorama_camera, "film_and_holdouts": film_and_holdouts}

@@ -156,12 +156,38 @@ class StillRenders(unittest.TestCase):
         exported = OUT / "same" / "scene.gltf"
         exported.parent.mkdir()
         sys.modules["caustic.export"].export(scene, exported)
-        flags = ENGINE.render_flags(scene.caustic)
+        flags = ENGINE.render_flags(scene)
         subprocess.run([BINARY, "render", str(exported), "-o", str(OUT / "same"), "--progress", "none", *flags],
                        check=True)
         cli = read_exr(OUT / "same" / "frame_0001.exr")
         # The same scene, settings and seed: the same image, up to Blender's EXR round trip.
         np.testing.assert_allclose(image, cli, rtol=1e-5, atol=1e-6)
+
+    def test_a_render_region_renders_the_same_pixels_there(self):
+        """A render region (Blender's border), cropped to or placed in the whole image, holds the
+        pixels the whole image's render has there, and nothing elsewhere."""
+        scene = glass_sphere_scene()
+        scene.caustic.photons = 3072
+        whole = render_still("region_whole")
+        r = scene.render
+        r.use_border, r.border_min_x, r.border_max_x, r.border_min_y, r.border_max_y = True, 0.25, 0.75, 0.5, 1.0
+        x, y, width, height = sys.modules["caustic.export"].render_region(scene)
+        self.assertEqual((x, y, width, height), (16, 24, 32, 24))
+        try:
+            r.use_crop_to_border = True
+            cropped = render_still("region_cropped")
+            r.use_crop_to_border = False
+            placed = render_still("region_placed")
+        finally:
+            r.use_border = r.use_crop_to_border = False
+        window = whole[48 - (y + height):48 - y, x:x + width]  # rows from the top
+        self.assertEqual(cropped.shape[:2], (height, width))
+        np.testing.assert_allclose(cropped, window, rtol=1e-5, atol=1e-6)
+        self.assertEqual(placed.shape[:2], (48, 64))
+        np.testing.assert_allclose(placed[48 - (y + height):48 - y, x:x + width], window, rtol=1e-5, atol=1e-6)
+        outside = np.ones((48, 64), bool)
+        outside[48 - (y + height):48 - y, x:x + width] = False
+        self.assertEqual(np.abs(placed[outside]).max(), 0.0)
 
     def test_dispersive_prism_separates_colours(self):
         """The dispersion regression prism (scenes/prism.gltf, imported): with the SF11 glass from the

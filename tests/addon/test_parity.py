@@ -45,12 +45,14 @@ def render_caustic(name):
     scene.render.image_settings.color_depth = '32'
     scene.render.filepath = str(OUT / f"{name}.exr")
     bpy.ops.render.render(write_still=True)
-    return OpenEXR.File(scene.render.filepath).channels()["RGBA"].pixels[..., :3].astype(np.float64)
+    rgba = OpenEXR.File(scene.render.filepath).channels()["RGBA"].pixels.astype(np.float64)
+    return rgba[..., :3], rgba[..., 3]
 
 
 def read_reference(name):
     channels = OpenEXR.File(str(REFERENCES / f"{name}.exr")).channels()
-    return channels["Combined"].pixels.astype(np.float64), channels["Index.X"].pixels
+    alpha = channels["Alpha.X"].pixels.astype(np.float64) if "Alpha.X" in channels else None
+    return channels["Combined"].pixels.astype(np.float64), channels["Index.X"].pixels, alpha
 
 
 def block_median_difference(image, reference, block=8):
@@ -103,8 +105,8 @@ class Parity(unittest.TestCase):
         tolerance = parity_scenes.TOLERANCES.get(name, TOLERANCE)
         colours = parity_scenes.COLOURS.get(name, {})
         peaks = parity_scenes.PEAKS.get(name, {})
-        image = render_caustic(name)
-        reference, index = read_reference(name)
+        image, alpha = render_caustic(name)
+        reference, index, reference_alpha = read_reference(name)
         sheet = save_sheet(name, image, reference)
         failures = []
         for obj, value in objects.items():
@@ -131,6 +133,13 @@ class Parity(unittest.TestCase):
             self.assertGreater(covered, 50, f"{name}: the silhouettes cover too few pixels")
             if stray:
                 failures.append(f"{stray} silhouette pixels lie more than 1 px from Cycles'")
+        if name in parity_scenes.ALPHA:
+            difference = np.abs(alpha - reference_alpha)
+            print(f"{name}: alpha differs from Cycles' by {difference.mean():.4f} on average, {difference.max():.3f} "
+                  f"at most (Caustic's mean {alpha.mean():.3f}, Cycles' {reference_alpha.mean():.3f})")
+            if difference.mean() > 0.02 or difference.max() > 0.25:
+                failures.append(f"alpha differs from Cycles' by {difference.mean():.3f} on average, "
+                                f"{difference.max():.3f} at most")
         median = block_median_difference(image, reference)
         print(f"{name}: block median difference {median:.4f} (sheet {sheet})")
         if median > tolerance:
@@ -145,6 +154,9 @@ class Parity(unittest.TestCase):
 
     def test_panorama_camera(self):
         self.check("panorama_camera")
+
+    def test_film_and_holdouts(self):
+        self.check("film_and_holdouts")
 
     def test_hdri(self):
         self.check("hdri")
