@@ -48,6 +48,36 @@ def render_flags(scene):
     return flags
 
 
+def percent(error):
+    """A relative error as a percentage: 0.034 is "3.4%"."""
+    return f"{error * 100:.2f}".rstrip("0").rstrip(".") + "%"
+
+
+def progress_line(event):
+    """The status line for a progress event: the frames, the pass, the error and, with a target
+    error, the time the renderer forecasts to reach it."""
+    passes = event.get("passes")
+    frames = event.get("frames", [event["frame"]])
+    label = f"frame {frames[0]}" if len(frames) == 1 else f"frames {frames[0]}-{frames[-1]}"
+    line = f"Caustic: {label}, pass {event['pass']}" + (f"/{passes}" if passes else "")
+    if event.get("error") is not None:
+        line += f", error {percent(event['error'])}"
+    if event.get("target_error") is not None:
+        left = event.get("seconds_left")
+        line += f", {percent(event['target_error'])} " + (f"in about {left:.0f} s" if left is not None else "targeted")
+    return line
+
+
+def progress_fraction(event):
+    """How far the frame is: its passes done of its pass count, or (without one) its time so far
+    of the forecast time to the target error; None when neither is known."""
+    if event.get("passes"):
+        return min(1.0, event["pass"] / event["passes"])
+    if event.get("seconds_left") is not None:
+        return event["elapsed_s"] / max(event["elapsed_s"] + event["seconds_left"], 1e-9)
+    return None
+
+
 def cancelled(engine):
     """Whether the user pressed Esc (one place to ask, which the tests stand in for)."""
     return engine.test_break()
@@ -98,12 +128,10 @@ class Session:
         if "written" in event:
             self.written[event["frame"]] = event["written"]
         elif "pass" in event:
-            passes = event.get("passes")
-            frames = event.get("frames", [event["frame"]])
-            label = f"frame {frames[0]}" if len(frames) == 1 else f"frames {frames[0]}-{frames[-1]}"
-            engine.update_stats("", f"Caustic: {label}, pass {event['pass']}" + (f"/{passes}" if passes else ""))
-            if passes:
-                engine.update_progress(min(1.0, event["pass"] / passes))
+            engine.update_stats("", progress_line(event))
+            fraction = progress_fraction(event)
+            if fraction is not None:
+                engine.update_progress(fraction)
 
     def close(self):
         """Ends the process (if it still runs), closes its pipes, and deletes the exported scene

@@ -498,7 +498,7 @@ fn render_block(
     let (mut active, mut own_poses) = (Vec::new(), Vec::new());
     for &frame in frames {
         let film = Film::new(s.width, s.height, mode, settings.spectral_bins);
-        let monitor = Monitor::new(&settings.errors, frame, s.width, s.height)?;
+        let monitor = Monitor::new(&settings.errors, frame, s.width, s.height, settings.alpha)?;
         active.push(FrameInProgress { frame, film, monitor, stats: PassStats::default(), elapsed_s: 0.0 });
         // Without a shutter every pass of a frame sees the same instant: pose it once.
         own_poses.push((shot.still.is_none() && shot.shutter.length == 0.0).then(|| {
@@ -535,9 +535,13 @@ fn render_block(
         for frame in &mut active {
             frame.elapsed_s += elapsed_share;
         }
-        let rendered: Vec<i32> = active.iter().map(|f| f.frame).collect();
-        progress.update(&rendered, done, active[0].elapsed_s);
         let photons = done * s.photons_per_pass as u64;
+        let mut target_met = Vec::with_capacity(active.len());
+        for frame in &mut active {
+            target_met.push(frame.monitor.after_pass(&frame.film, frame.elapsed_s, photons)?);
+        }
+        let rendered: Vec<i32> = active.iter().map(|f| f.frame).collect();
+        progress.update(&rendered, done, active[0].elapsed_s, active[0].monitor.status());
         if stop_requested() {
             let written = report.frames.len();
             let unfinished: Vec<String> = active.iter().map(|f| f.frame.to_string()).collect();
@@ -547,8 +551,8 @@ fn render_block(
             ));
         }
         let (mut still_running, mut their_poses) = (Vec::new(), Vec::new());
-        for (mut frame, own) in active.into_iter().zip(own_poses) {
-            match stop_reason(settings, &mut frame, photons, limit)? {
+        for ((frame, own), met) in active.into_iter().zip(own_poses).zip(target_met) {
+            match stop_reason(settings, &frame, met, limit) {
                 Some(stopped_by) => finish_frame(shot, settings, frame, photons, stopped_by, report)?,
                 None => {
                     still_running.push(frame);
@@ -611,16 +615,16 @@ pub fn write_frame(film: &Film, errors: &[PixelError], path: &Path) -> Result<()
     film.write_exr(path, &[("Error.Y", bound), ("Variance.Y", variance)])
 }
 
-/// What stops `frame` after `photons` photon paths, if anything: its target error, its time
-/// budget or the pass count.
+/// What stops `frame`, if anything: its target error (`target_met`, as its monitor found), its
+/// time budget or the pass count.
 fn stop_reason(
     settings: &RenderSettings,
-    frame: &mut FrameInProgress,
-    photons: u64,
+    frame: &FrameInProgress,
+    target_met: bool,
     limit: Option<u64>,
-) -> Result<Option<StopReason>, String> {
+) -> Option<StopReason> {
     let passes = frame.film.passes;
-    Ok(if frame.monitor.after_pass(&frame.film, frame.elapsed_s, photons)? {
+    if target_met {
         Some(StopReason::TargetError)
     } else if settings.time_budget_s.is_some_and(|budget| frame.elapsed_s >= budget) {
         Some(StopReason::TimeBudget)
@@ -628,7 +632,7 @@ fn stop_reason(
         Some(StopReason::Passes)
     } else {
         None
-    })
+    }
 }
 
 /// Writes a stopped frame's EXR (with its error passes, after `photons` photon paths), announces it and reports it.

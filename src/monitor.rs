@@ -3,6 +3,16 @@
 //!
 //! A log line is written after passes 1, 2, 4, 8, ... and after the last pass (which also says
 //! what stopped the frame), so that error against time can be plotted on log axes.
+//!
+//! The progress display shows the error as it falls: measured after passes 1, 2, 4, 8, ..., and
+//! after every pass when a target error is set. With a target, the time left is forecast from the
+//! error measured so far: SPPM's error falls as a power of time (Knaus & Zwicker: variance as
+//! `t^(-alpha)`, bias as `t^(alpha - 1)`, their sum as whichever dominates), so a line fitted to
+//! log error against log time over the later half of the time so far (the earlier passes, whose
+//! radius is still large, fall differently) is extended to the target. Its slope is held between
+//! the fall of noise at a fixed radius, `t^(-1/2)`, and the slowest of the two terms, `t^(-alpha/2)`
+//! and `t^(alpha - 1)`: early passes fall faster than they go on to (on the gems at 128x96 the
+//! unheld forecast after a tenth of the render was 49% short, held 13%).
 
 use std::io::Write;
 use std::path::{Path, PathBuf};
@@ -99,6 +109,61 @@ pub fn compare(image: &Path, reference: &Path) -> Result<TrueError, String> {
     Ok(image_error(&values, &truth))
 }
 
+/// A frame's error as last measured, and the forecast time to its target.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct ErrorStatus {
+    /// The statistic of the relative error bound the target is on (the mean without a target).
+    pub error: f64,
+    /// The target error, if any.
+    pub target: Option<f64>,
+    /// Seconds of rendering left until the target is met, once it can be forecast.
+    pub seconds_left: Option<f64>,
+}
+
+/// The error measured against rendering time.
+#[derive(Clone, Debug, Default)]
+pub struct ErrorHistory {
+    /// (elapsed seconds, error) after each measurement.
+    points: Vec<(f64, f64)>,
+}
+
+/// Measurements the forecast needs in the later half of the time so far.
+const FORECAST_POINTS: usize = 4;
+
+impl ErrorHistory {
+    /// Adds a measurement.
+    pub fn push(&mut self, elapsed_s: f64, error: f64) {
+        if elapsed_s > 0.0 && error > 0.0 && error.is_finite() {
+            self.points.push((elapsed_s, error));
+        }
+    }
+
+    /// Seconds from the last measurement until the error falls to `target`: the power law
+    /// fitted (least squares on log error against log time) to the measurements of the later
+    /// half of the time so far, its slope held within `slopes`, extended; `None` with too few of
+    /// them or an error not falling.
+    pub fn seconds_to(&self, target: f64, slopes: [f64; 2]) -> Option<f64> {
+        let &(now, _) = self.points.last()?;
+        let recent: Vec<(f64, f64)> =
+            self.points.iter().filter(|p| p.0 >= now / 2.0).map(|&(t, e)| (t.ln(), e.ln())).collect();
+        if recent.len() < FORECAST_POINTS {
+            return None;
+        }
+        let n = recent.len() as f64;
+        let (mean_t, mean_e) = recent.iter().fold((0.0, 0.0), |(a, b), p| (a + p.0 / n, b + p.1 / n));
+        let covariance: f64 = recent.iter().map(|p| (p.0 - mean_t) * (p.1 - mean_e)).sum();
+        let spread: f64 = recent.iter().map(|p| (p.0 - mean_t).powi(2)).sum();
+        let slope = covariance / spread;
+        if !(slope < -0.02) {
+            return None;
+        }
+        let slope = slope.clamp(slopes[0], slopes[1]);
+        // ln e = mean_e + slope (ln t - mean_t): solve for ln t at the target.
+        let target_t = (mean_t + (target.ln() - mean_e) / slope).exp();
+        Some((target_t - now).max(0.0))
+    }
+}
+
 /// Watches one frame.
 pub struct Monitor {
     settings: ErrorSettings,
@@ -106,11 +171,17 @@ pub struct Monitor {
     reference: Option<Vec<f64>>,
     log: Option<std::fs::File>,
     next_log_pass: u64,
+    next_status_pass: u64,
+    history: ErrorHistory,
+    /// The steepest and the shallowest slope of log error against log time to forecast with.
+    slopes: [f64; 2],
+    status: Option<ErrorStatus>,
 }
 
 impl Monitor {
-    /// A monitor for `frame` of a `width` x `height` film; checks the reference's size.
-    pub fn new(settings: &ErrorSettings, frame: i32, width: u32, height: u32) -> Result<Self, String> {
+    /// A monitor for `frame` of a `width` x `height` film rendered with radius reduction `alpha`;
+    /// checks the reference's size.
+    pub fn new(settings: &ErrorSettings, frame: i32, width: u32, height: u32, alpha: f64) -> Result<Self, String> {
         let reference = match &settings.reference {
             Some(pattern) => {
                 let path = PathBuf::from(pattern.to_string_lossy().replace("####", &format!("{frame:04}")));
@@ -135,32 +206,49 @@ impl Monitor {
             ),
             None => None,
         };
-        Ok(Monitor { settings: settings.clone(), frame, reference, log, next_log_pass: 1 })
+        Ok(Monitor {
+            settings: settings.clone(),
+            frame,
+            reference,
+            log,
+            next_log_pass: 1,
+            next_status_pass: 1,
+            history: ErrorHistory::default(),
+            slopes: [-0.5, -(alpha / 2.0).min(1.0 - alpha)],
+            status: None,
+        })
     }
 
-    /// Whether anything needs the error after each pass.
-    fn watching(&self) -> bool {
-        self.log.is_some() || self.settings.target.is_some()
+    /// The error as last measured, with the forecast time to the target.
+    pub fn status(&self) -> Option<ErrorStatus> {
+        self.status
     }
 
-    /// Called after each pass: logs when due, and says whether the target error is met.
+    /// Called after each pass: measures the error when due (passes 1, 2, 4, ..., or every pass
+    /// with a target), logs it when due, and says whether the target error is met.
     pub fn after_pass(&mut self, film: &Film, elapsed_s: f64, photons: u64) -> Result<bool, String> {
-        if !self.watching() {
-            return Ok(false);
-        }
-        let due = film.passes >= self.next_log_pass;
-        if !due && self.settings.target.is_none() {
+        let log_due = self.log.is_some() && film.passes >= self.next_log_pass;
+        let status_due = film.passes >= self.next_status_pass;
+        if !log_due && !status_due && self.settings.target.is_none() {
             return Ok(false);
         }
         let errors = pixel_errors(film, self.settings.confidence);
         let summary = summarize(&errors);
-        if due {
+        if log_due {
             self.next_log_pass *= 2;
             self.write_line(film, &errors, summary, elapsed_s, photons, None)?;
         }
-        Ok(self.settings.target.is_some_and(|(target, statistic)| {
-            film.passes >= MIN_PASSES_TO_STOP && summary.get(statistic) <= target
-        }))
+        if status_due {
+            self.next_status_pass *= 2;
+        }
+        let target = self.settings.target;
+        let error = summary.get(target.map_or(Statistic::Mean, |(_, statistic)| statistic));
+        self.history.push(elapsed_s, error);
+        let seconds_left = target.and_then(|(t, _)| self.history.seconds_to(t, self.slopes));
+        // After one pass the variance, and with it the error, is not known yet.
+        self.status =
+            error.is_finite().then_some(ErrorStatus { error, target: target.map(|(t, _)| t), seconds_left });
+        Ok(target.is_some_and(|(t, _)| film.passes >= MIN_PASSES_TO_STOP && error <= t))
     }
 
     /// Called when the frame ends: the last log line, with what stopped it; gives the errors.
@@ -199,5 +287,41 @@ impl Monitor {
         }
         let Some(log) = self.log.as_mut() else { return Ok(()) };
         writeln!(log, "{line}").map_err(|e| format!("cannot write the log: {e}"))
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn an_error_falling_as_a_power_of_time_is_forecast_to_its_target() {
+        let mut history = ErrorHistory::default();
+        // error = 0.5 t^(-0.4), measured each second for 20 s (a noisier start does not matter).
+        history.push(0.5, 3.0);
+        for t in 1..=20 {
+            history.push(f64::from(t), 0.5 * f64::from(t).powf(-0.4));
+        }
+        // 0.05 = 0.5 t^(-0.4) at t = 10^(1/0.4) = 316.2 s: 296.2 s after the 20th.
+        let left = history.seconds_to(0.05, [-0.5, -0.2]).unwrap();
+        assert!((left - 296.2).abs() < 0.5, "{left}");
+        assert_eq!(history.seconds_to(0.9, [-0.5, -0.2]), Some(0.0), "a target already met");
+        // Held to a slope of -0.35, through the mean of the later half's points (t from 10 to 20 s).
+        let held = history.seconds_to(0.05, [-0.35, -0.3]).unwrap();
+        let mean_t = (10..=20).map(|t| f64::from(t).ln()).sum::<f64>() / 11.0;
+        let mean_e = 0.5f64.ln() - 0.4 * mean_t;
+        let expected = (mean_t + (0.05f64.ln() - mean_e) / -0.35).exp() - 20.0;
+        assert!((held / expected - 1.0).abs() < 1e-6 && held > left, "{held} against {expected}");
+    }
+
+    #[test]
+    fn no_forecast_from_too_few_points_or_an_error_that_does_not_fall() {
+        let mut history = ErrorHistory::default();
+        history.push(1.0, 0.3);
+        history.push(2.0, 0.2);
+        assert_eq!(history.seconds_to(0.1, [-0.5, -0.2]), None);
+        let mut flat = ErrorHistory::default();
+        (1..10).for_each(|t| flat.push(f64::from(t), 0.2));
+        assert_eq!(flat.seconds_to(0.1, [-0.5, -0.2]), None);
     }
 }

@@ -1,5 +1,7 @@
 //! Progress as the user sees it: a bar on the terminal, or JSON lines on stdout for the add-on.
 
+use crate::monitor::ErrorStatus;
+
 /// How progress is shown.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, clap::ValueEnum)]
 pub enum ProgressStyle {
@@ -19,6 +21,17 @@ fn json_line(line: serde_json::Value) {
     let _ = writeln!(stdout, "{line}").and_then(|()| stdout.flush());
 }
 
+/// The error and the forecast for the bar: "error 3.4%", "error 3.4% (2% in about 12 s)".
+fn describe(status: ErrorStatus) -> String {
+    let percent = |e: f64| format!("{}%", format!("{:.2}", e * 100.0).trim_end_matches('0').trim_end_matches('.'));
+    let error = format!("error {}", percent(status.error));
+    match (status.target, status.seconds_left) {
+        (Some(target), Some(left)) => format!("{error} ({} in about {left:.0} s)", percent(target)),
+        (Some(target), None) => format!("{error} (target {})", percent(target)),
+        (None, _) => error,
+    }
+}
+
 /// Shows passes as they finish.
 pub struct Progress {
     style: ProgressStyle,
@@ -35,8 +48,8 @@ impl Progress {
                 indicatif::ProgressBar::with_draw_target(limit, indicatif::ProgressDrawTarget::stderr());
             // Without a pass count the time budget ends the frame: show passes and time only.
             let template = match limit {
-                Some(_) => "{prefix} [{bar:40}] pass {pos}/{len} {elapsed_precise} eta {eta}",
-                None => "{prefix} pass {pos} {elapsed_precise} (until the time budget)",
+                Some(_) => "{prefix} [{bar:40}] pass {pos}/{len} {elapsed_precise} eta {eta} {msg}",
+                None => "{prefix} pass {pos} {elapsed_precise} {msg}",
             };
             let style = indicatif::ProgressStyle::with_template(template).expect("valid template");
             bar.set_style(style.progress_chars("=> "));
@@ -50,13 +63,31 @@ impl Progress {
     }
 
     /// Reports that `frames` have rendered `pass` passes, after `elapsed_s` seconds each (a frame's
-    /// share of the time its block took). A JSON line is `{"frame", "frames", "pass", "passes", "elapsed_s"}`, where
-    /// `frame` is the first of `frames`.
-    pub fn update(&self, frames: &[i32], pass: u64, elapsed_s: f64) {
+    /// share of the time its block took), with the first frame's error as last measured. A JSON
+    /// line is `{"frame", "frames", "pass", "passes", "elapsed_s"}`, where `frame` is the first of
+    /// `frames`, plus `error` (the relative error bound's statistic), and with a target error
+    /// `target_error` and, once it can be forecast, `seconds_left`.
+    pub fn update(&self, frames: &[i32], pass: u64, elapsed_s: f64, status: Option<ErrorStatus>) {
         match self.style {
-            ProgressStyle::Bar => self.bar.as_ref().expect("bar style has a bar").set_position(pass),
-            ProgressStyle::Json => json_line(serde_json::json!({"frame": frames[0], "frames": frames,
-                "pass": pass, "passes": self.limit, "elapsed_s": elapsed_s})),
+            ProgressStyle::Bar => {
+                let bar = self.bar.as_ref().expect("bar style has a bar");
+                bar.set_position(pass);
+                if let Some(status) = status {
+                    bar.set_message(describe(status));
+                }
+            }
+            ProgressStyle::Json => {
+                let mut line = serde_json::json!({"frame": frames[0], "frames": frames, "pass": pass,
+                    "passes": self.limit, "elapsed_s": elapsed_s});
+                if let Some(status) = status {
+                    line["error"] = serde_json::json!(status.error);
+                    if let Some(target) = status.target {
+                        line["target_error"] = serde_json::json!(target);
+                        line["seconds_left"] = serde_json::json!(status.seconds_left);
+                    }
+                }
+                json_line(line)
+            }
             ProgressStyle::None => {}
         }
     }

@@ -8,6 +8,7 @@ with `bpy.ops.render.render()`, then reads the pixels Blender saved.
 
 import json
 import math
+import re
 import os
 import pathlib
 import subprocess
@@ -188,6 +189,26 @@ class StillRenders(unittest.TestCase):
         outside = np.ones((48, 64), bool)
         outside[48 - (y + height):48 - y, x:x + width] = False
         self.assertEqual(np.abs(placed[outside]).max(), 0.0)
+
+    def test_the_status_line_shows_the_error_and_the_time_to_the_target(self):
+        """With a target error the status line shows the error falling and the forecast time to
+        the target, and the progress bar follows the forecast."""
+        scene = glass_sphere_scene()
+        scene.caustic.passes, scene.caustic.use_target_error, scene.caustic.target_error = 400, True, 0.25
+        lines, fractions = [], []
+        line, fraction = ENGINE.progress_line, ENGINE.progress_fraction
+        ENGINE.progress_line = lambda event: lines.append(line(event)) or lines[-1]
+        ENGINE.progress_fraction = lambda event: fractions.append(fraction(event)) or fractions[-1]
+        try:
+            render_still("status_line")
+        finally:
+            ENGINE.progress_line, ENGINE.progress_fraction = line, fraction
+            scene.caustic.use_target_error = False
+        forecasts = [l for l in lines if re.search(r", error \d+(\.\d+)?%, 25% in about \d+ s$", l)]
+        self.assertTrue(forecasts, lines[-5:])
+        errors = [float(re.search(r"error ([\d.]+)%", l).group(1)) for l in lines if "error" in l]
+        self.assertLess(errors[-1], errors[0], "the error falls")
+        self.assertTrue(all(0.0 <= f <= 1.0 for f in fractions if f is not None), fractions[-5:])
 
     def test_dispersive_prism_separates_colours(self):
         """The dispersion regression prism (scenes/prism.gltf, imported): with the SF11 glass from the
