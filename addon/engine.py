@@ -14,7 +14,11 @@ import bpy
 
 from . import export
 from .process import RenderProcess
-from .properties import find_binary
+from .properties import compositor_denoises, find_binary
+
+
+# Cycles' denoising passes, which Caustic writes with the Denoise option: name, channels, kind.
+DENOISING_PASSES = (("Denoising Albedo", "RGB", 'COLOR'), ("Denoising Normal", "XYZ", 'VECTOR'))
 
 
 class CausticError(Exception):
@@ -32,6 +36,8 @@ def render_flags(scene):
     """`caustic render` flags from the scene's Caustic settings and its render region."""
     settings = scene.caustic
     flags = ["--passes", str(settings.passes), "--alpha", repr(settings.alpha), "--seed", str(settings.seed)]
+    if settings.denoise:
+        flags.append("--denoising-passes")
     region = export.render_region(scene)
     if region is not None:
         x, y, width, height = region
@@ -176,6 +182,9 @@ class CausticRenderEngine(bpy.types.RenderEngine):
     def update_render_passes(self, scene=None, renderlayer=None):
         self.register_pass(scene, renderlayer, "Combined", 4, "RGBA", 'COLOR')
         self.register_pass(scene, renderlayer, "Error", 1, "Y", 'VALUE')
+        if scene is not None and scene.caustic.denoise:
+            for name, channels, kind in DENOISING_PASSES:
+                self.register_pass(scene, renderlayer, name, len(channels), channels, kind)
 
     def render(self, depsgraph):
         # An exception escaping render() is swallowed by Blender, which then saves a blank image:
@@ -196,6 +205,9 @@ class CausticRenderEngine(bpy.types.RenderEngine):
         if session.written == {} and scene.frame_current == session.frames[0]:
             for warning in export.scene_warnings(depsgraph):
                 self.report({'WARNING'}, f"Caustic: {warning}")
+            if scene.caustic.denoise and not compositor_denoises(scene):
+                self.report({'WARNING'}, "Caustic: Denoise is on, but the scene's compositor has no Denoise node "
+                                         "(or compositing is off): add one fed by Denoising Albedo and Normal")
         path = session.wait_for(self, scene.frame_current)
         if path is None:
             return
@@ -212,6 +224,9 @@ class CausticRenderEngine(bpy.types.RenderEngine):
         region = export.render_region(scene)
         width, height = export.resolution(scene) if region is None else region[2:]
         self.add_pass("Error", 1, "Y")
+        if scene.caustic.denoise:
+            for name, channels, _ in DENOISING_PASSES:
+                self.add_pass(name, len(channels), channels)
         result = self.begin_result(0, 0, width, height)
         result.layers[0].load_from_file(path)
         self.end_result(result)

@@ -19,6 +19,50 @@ GLASSES = [
 ]
 
 
+# The compositor node group the Denoise option makes when the scene has none.
+DENOISE_GROUP = "Caustic Denoise"
+
+
+def denoise_compositor(scene):
+    """Makes the scene's compositor denoise the render with Blender's Denoise node (Open Image
+    Denoise), guided by Caustic's Denoising Albedo and Denoising Normal passes, unless the scene
+    has a compositor of its own. Returns whether the compositor denoises."""
+    group = scene.compositing_node_group
+    if group is not None:
+        return any(node.type == 'DENOISE' for node in group.nodes)
+    group = bpy.data.node_groups.get(DENOISE_GROUP) or make_denoise_group()
+    scene.compositing_node_group = group
+    scene.render.use_compositing = True
+    return True
+
+
+def compositor_denoises(scene):
+    """Whether Blender's compositor runs a Denoise node on the render."""
+    group = scene.compositing_node_group
+    return scene.render.use_compositing and group is not None and any(n.type == 'DENOISE' for n in group.nodes)
+
+
+def make_denoise_group():
+    """Render Layers (Image, Denoising Albedo, Denoising Normal) into a Denoise node (HDR) into
+    the group's Image output."""
+    group = bpy.data.node_groups.new(DENOISE_GROUP, "CompositorNodeTree")
+    group.interface.new_socket("Image", in_out='OUTPUT', socket_type='NodeSocketColor')
+    layers, denoise = group.nodes.new("CompositorNodeRLayers"), group.nodes.new("CompositorNodeDenoise")
+    output = group.nodes.new("NodeGroupOutput")
+    layers.location, denoise.location, output.location = (-300, 0), (0, 0), (250, 0)
+    denoise.inputs["HDR"].default_value = True
+    group.links.new(layers.outputs["Image"], denoise.inputs["Image"])
+    group.links.new(layers.outputs["Denoising Albedo"], denoise.inputs["Albedo"])
+    group.links.new(layers.outputs["Denoising Normal"], denoise.inputs["Normal"])
+    group.links.new(denoise.outputs["Image"], output.inputs["Image"])
+    return group
+
+
+def denoise_changed(settings, context):
+    if settings.denoise:
+        denoise_compositor(settings.id_data)
+
+
 class CausticRenderSettings(bpy.types.PropertyGroup):
     """`scene.caustic`: the flags of `caustic render`."""
 
@@ -38,6 +82,10 @@ class CausticRenderSettings(bpy.types.PropertyGroup):
                          description="How fast the gather radius shrinks (Knaus & Zwicker)")
     seed: IntProperty(name="Seed", default=1, min=0, description="The same seed gives the same image")
     threads: IntProperty(name="Threads", default=0, min=0, max=256, description="Worker threads (0: all cores)")
+    denoise: BoolProperty(name="Denoise", default=False, update=denoise_changed,
+                          description="Write the Denoising Albedo and Denoising Normal passes and denoise the render "
+                                      "with Blender's Denoise node (Open Image Denoise) in the compositor (set up "
+                                      "when the scene has no compositor of its own)")
 
 
 class CausticMaterialSettings(bpy.types.PropertyGroup):

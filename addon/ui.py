@@ -8,6 +8,7 @@ import bpy
 BLENDER_PANELS = (
     "DATA_PT_camera_dof", "DATA_PT_camera_dof_aperture", "DATA_PT_EEVEE_light", "RENDER_PT_eevee_motion_blur",
     "EEVEE_MATERIAL_PT_context_material", "EEVEE_MATERIAL_PT_surface", "EEVEE_WORLD_PT_surface",
+    "RENDER_PT_eevee_film", "RENDER_PT_film",
 )
 
 
@@ -40,6 +41,7 @@ class RENDER_PT_caustic_sampling(CausticPanel, bpy.types.Panel):
         layout.prop(settings, "alpha")
         layout.prop(settings, "seed")
         layout.prop(settings, "threads")
+        layout.prop(settings, "denoise")
 
 
 class MATERIAL_PT_caustic_glass(CausticPanel, bpy.types.Panel):

@@ -170,7 +170,7 @@ fn in_pool<T: Send>(threads: usize, work: impl FnOnce() -> T + Send) -> Result<(
 /// passes to the film.
 fn time_passes(renderer: &Renderer, passes: std::ops::Range<u64>) -> (PassStats, f64) {
     let s = renderer.settings();
-    let mut film = Film::new(s.width, s.height, FilmMode::Spectral, 0);
+    let mut film = Film::new(s.width, s.height, FilmMode::Spectral, 0, false);
     let (mut stats, mut accumulation_s) = (PassStats::default(), 0.0);
     for i in passes {
         let (samples, estimates, pass_stats) = renderer.run_pass(i);

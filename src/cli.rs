@@ -126,6 +126,10 @@ pub struct RenderArgs {
     /// radiance relative to white at that wavelength, in its colour).
     #[arg(long, value_name = "NM", value_parser = wavelength, conflicts_with = "spectral_bins")]
     wavelength: Option<f32>,
+    /// Also write Cycles' Denoising Albedo and Denoising Normal passes (for Blender's Denoise
+    /// node, Open Image Denoise).
+    #[arg(long)]
+    denoising_passes: bool,
     /// Also write K spectral bands (channels Spectral.<centre>nm, W/(m^2 sr nm)), 1 to 94.
     #[arg(long, value_name = "K", value_parser = spectral_bins, default_value_t = 0)]
     spectral_bins: usize,
@@ -327,6 +331,7 @@ impl RenderArgs {
             progress: self.progress,
             wavelength_nm: self.wavelength,
             spectral_bins: self.spectral_bins,
+            denoising_passes: self.denoising_passes,
             frames: self.frames.0.clone(),
             resume: self.resume,
             shutter_frames: self.shutter,

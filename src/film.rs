@@ -8,7 +8,8 @@
 //! white-balanced (below), XYZ to linear Rec.709, written as one part with `Combined.R/G/B/A`
 //! (what Blender's render result reads), to a temporary file that is renamed into place when
 //! complete. Optional spectral bins add `Spectral.<centre>nm` channels: the mean spectral
-//! radiance over each band, W / (m^2 sr nm).
+//! radiance over each band, W / (m^2 sr nm). Optional denoising guides add Cycles' `Denoising
+//! Albedo.R/G/B` (the albedo's colour under white light) and `Denoising Normal.X/Y/Z`.
 //!
 //! With one fixed wavelength (`--wavelength`), the image is the radiance relative to the white
 //! illuminant at that wavelength (a white surface under a white light is 1) in the colour of that
@@ -62,6 +63,11 @@ impl SpectralBins {
     pub fn channel_name(&self, k: usize) -> String {
         format!("Spectral.{:.0}nm", f64::from(LAMBDA_MIN_NM) + (k as f64 + 0.5) * self.width_nm())
     }
+}
+
+/// The XYZ of lane values weighed by `weights` ([`Film::lane_weights`]).
+fn lanes_xyz(weights: &[DVec3; LANES], values: SampledSpectrum) -> DVec3 {
+    weights.iter().zip(values.to_array()).map(|(w, v)| *w * f64::from(v)).sum()
 }
 
 /// The XYZ, of luminance 1, of the colour shown for light of one wavelength: the spectral colour
@@ -131,13 +137,19 @@ pub struct Film {
     pub mode: FilmMode,
     /// Optional spectral bands (count 0 when off).
     pub bins: SpectralBins,
+    /// Sums of the denoising guides per pixel, [`GUIDE_SUMS`] each (empty when off).
+    pub guides: Vec<f64>,
 }
 
+/// The sums of one pixel's denoising guides: the albedo's XYZ under white, and the normal.
+pub const GUIDE_SUMS: usize = 6;
+
 impl Film {
-    /// An empty film with `spectral_bins` bands (0 for none).
-    pub fn new(width: u32, height: u32, mode: FilmMode, spectral_bins: usize) -> Self {
+    /// An empty film with `spectral_bins` bands (0 for none), and denoising guides if `guides`.
+    pub fn new(width: u32, height: u32, mode: FilmMode, spectral_bins: usize, guides: bool) -> Self {
         let pixels = (width * height) as usize;
         Film {
+            guides: vec![0.0; if guides { pixels * GUIDE_SUMS } else { 0 }],
             mode,
             bins: SpectralBins { count: spectral_bins, sums: vec![0.0; pixels * spectral_bins] },
             width,
@@ -165,6 +177,9 @@ impl Film {
         for (a, b) in self.bins.sums.iter_mut().zip(&other.bins.sums) {
             *a += b;
         }
+        for (a, b) in self.guides.iter_mut().zip(&other.guides) {
+            *a += b;
+        }
         self.white_xyz += other.white_xyz;
         self.passes += other.passes;
         self.white_y += other.white_y;
@@ -172,18 +187,20 @@ impl Film {
         self.non_finite_estimates += other.non_finite_estimates;
     }
 
-    /// Every per-pixel sum as an f64, pixel by pixel (`PIXEL_SUMS` each), then the spectral bands.
+    /// Every per-pixel sum as an f64, pixel by pixel (`PIXEL_SUMS` each), then the spectral bands,
+    /// then the guides.
     pub fn pixel_sums(&self) -> Vec<f64> {
         let per_pixel = self.pixels.iter().flat_map(|p| {
             [p.xyz.x, p.xyz.y, p.xyz.z, p.y_squared, p.y_white, p.laplacian_y, p.coverage, p.passes as f64]
         });
-        per_pixel.chain(self.bins.sums.iter().copied()).collect()
+        per_pixel.chain(self.bins.sums.iter().copied()).chain(self.guides.iter().copied()).collect()
     }
 
     /// Puts back sums that [`Film::pixel_sums`] gave; `None` when their count does not fit.
     pub fn set_pixel_sums(&mut self, sums: &[f64]) -> Option<()> {
         let pixel_part = self.pixels.len() * PIXEL_SUMS;
-        if sums.len() != pixel_part + self.bins.sums.len() {
+        let bins_end = pixel_part + self.bins.sums.len();
+        if sums.len() != bins_end + self.guides.len() {
             return None;
         }
         for (p, s) in self.pixels.iter_mut().zip(sums[..pixel_part].chunks_exact(PIXEL_SUMS)) {
@@ -196,7 +213,8 @@ impl Film {
                 passes: s[7] as u64,
             };
         }
-        self.bins.sums.copy_from_slice(&sums[pixel_part..]);
+        self.bins.sums.copy_from_slice(&sums[pixel_part..bins_end]);
+        self.guides.copy_from_slice(&sums[bins_end..]);
         Some(())
     }
 
@@ -209,18 +227,8 @@ impl Film {
         estimates: impl Iterator<Item = (SampledSpectrum, SampledSpectrum, f32)>,
     ) {
         let radius2 = f64::from(radius) * f64::from(radius);
-        // Each lane's XYZ per unit radiance: the estimate is the mean over lanes.
-        let weights: [DVec3; LANES] = std::array::from_fn(|k| {
-            let (lambda_nm, pdf) = (lambda.nm[k], lambda.pdf[k]);
-            let weight = match self.mode {
-                FilmMode::Spectral => (cmf(lambda_nm) / pdf).as_dvec3(),
-                FilmMode::Monochromatic { .. } => display_xyz(lambda_nm) / f64::from(d65(lambda_nm)),
-            };
-            weight / LANES as f64
-        });
-        let lanes_xyz = |values: SampledSpectrum| -> DVec3 {
-            weights.iter().zip(values.to_array()).map(|(w, v)| *w * f64::from(v)).sum()
-        };
+        let weights = self.lane_weights(lambda);
+        let lanes_xyz = |values: SampledSpectrum| lanes_xyz(&weights, values);
         let white_xyz = lanes_xyz(lambda.d65);
         let white_y = match self.mode {
             FilmMode::Spectral => white_xyz.y,
@@ -256,6 +264,53 @@ impl Film {
                 }
             }
         }
+    }
+
+    /// Each lane's XYZ per unit radiance at `lambda` (an estimate is the mean over lanes).
+    fn lane_weights(&self, lambda: &Wavelengths) -> [DVec3; LANES] {
+        std::array::from_fn(|k| {
+            let (lambda_nm, pdf) = (lambda.nm[k], lambda.pdf[k]);
+            let weight = match self.mode {
+                FilmMode::Spectral => (cmf(lambda_nm) / pdf).as_dvec3(),
+                FilmMode::Monochromatic { .. } => display_xyz(lambda_nm) / f64::from(d65(lambda_nm)),
+            };
+            weight / LANES as f64
+        })
+    }
+
+    /// Adds one pass's denoising guides (each pixel's albedo at the wavelengths `lambda` and its
+    /// normal), after [`Film::add_pass`] added the pass (whose count they share); nothing when the
+    /// film keeps no guides.
+    pub fn add_guides(&mut self, lambda: &Wavelengths, guides: impl Iterator<Item = (SampledSpectrum, glam::Vec3)>) {
+        let weights = self.lane_weights(lambda);
+        for (sums, (albedo, normal)) in self.guides.chunks_exact_mut(GUIDE_SUMS).zip(guides) {
+            let xyz = lanes_xyz(&weights, albedo * lambda.d65);
+            let values = [xyz.x, xyz.y, xyz.z, f64::from(normal.x), f64::from(normal.y), f64::from(normal.z)];
+            for (sum, value) in sums.iter_mut().zip(values) {
+                *sum += if value.is_finite() { value } else { 0.0 };
+            }
+        }
+    }
+
+    /// The guides' channels (name, one value per pixel): the mean albedo, white-balanced and in
+    /// linear Rec.709, and the mean normal.
+    fn guide_channels(&self) -> Vec<(&'static str, Vec<f32>)> {
+        if self.guides.is_empty() {
+            return Vec::new();
+        }
+        let balance = self.white_balance();
+        let passes = self.passes.max(1) as f64;
+        let pixels: Vec<[f64; GUIDE_SUMS]> = self
+            .guides
+            .chunks_exact(GUIDE_SUMS)
+            .map(|s| {
+                let rgb = xyz_to_linear_rec709(DVec3::new(s[0], s[1], s[2]) / passes * balance);
+                [rgb.x, rgb.y, rgb.z, s[3] / passes, s[4] / passes, s[5] / passes]
+            })
+            .collect();
+        let names = ["Denoising Albedo.R", "Denoising Albedo.G", "Denoising Albedo.B", "Denoising Normal.X",
+            "Denoising Normal.Y", "Denoising Normal.Z"];
+        names.iter().enumerate().map(|(k, name)| (*name, pixels.iter().map(|p| p[k] as f32).collect())).collect()
     }
 
     /// The per-channel XYZ scale that makes the passes' white estimate exact.
@@ -307,8 +362,8 @@ impl Film {
             channel("Combined.B", component(2)),
             channel("Combined.A", self.alpha()),
         ];
-        for (name, values) in extra {
-            list.push(channel(name, values.clone()));
+        for (name, values) in extra.iter().cloned().chain(self.guide_channels()) {
+            list.push(channel(name, values));
         }
         for k in 0..self.bins.count {
             let passes = self.passes.max(1) as f64;

@@ -12,7 +12,7 @@ use std::time::Instant;
 
 use crate::accel::{Accel, Bvh};
 use crate::error::{summarize, ErrorSummary, PixelError};
-use crate::film::{Film, FilmMode};
+use crate::film::{Film, FilmMode, GUIDE_SUMS};
 use crate::monitor::{ErrorSettings, Monitor, StopReason};
 use crate::partial;
 use crate::progress::Progress;
@@ -78,6 +78,8 @@ pub struct RenderSettings {
     pub wavelength_nm: Option<f32>,
     /// Spectral bands written beside Combined (0 for none).
     pub spectral_bins: usize,
+    /// Write Cycles' Denoising Albedo and Denoising Normal passes.
+    pub denoising_passes: bool,
     /// Shutter length override in frames (0: no motion blur), centred on the frame.
     pub shutter_frames: Option<f32>,
     /// f-stop override (0: a pinhole).
@@ -114,6 +116,7 @@ impl RenderSettings {
             progress: ProgressStyle::None,
             wavelength_nm: None,
             spectral_bins: 0,
+            denoising_passes: false,
             shutter_frames: None,
             fstop: None,
             focus_distance: None,
@@ -288,6 +291,7 @@ fn fingerprint(
         "seed": sppm.seed,
         "wavelength_nm": sppm.fixed_wavelength_nm,
         "spectral_bins": settings.spectral_bins,
+        "denoising_passes": settings.denoising_passes,
         "shutter": [shutter.open, shutter.length],
         "lens": lens,
     })
@@ -434,7 +438,8 @@ impl Shot {
             return 1;
         }
         let pixels = u64::from(self.sppm.width) * u64::from(self.sppm.height);
-        let per_frame = pixels * (FRAME_BYTES_PER_PIXEL + 8 * settings.spectral_bins as u64);
+        let guides = if settings.denoising_passes { GUIDE_SUMS } else { 0 };
+        let per_frame = pixels * (FRAME_BYTES_PER_PIXEL + 8 * (settings.spectral_bins + guides) as u64);
         let photons = self.sppm.photons_per_pass as u64 * PHOTON_BYTES_PER_PATH;
         let shared = pixels * BYTES_PER_PIXEL + photons;
         let fit = settings.memory_budget.saturating_sub(shared) / per_frame.max(1);
@@ -497,7 +502,7 @@ fn render_block(
     };
     let (mut active, mut own_poses) = (Vec::new(), Vec::new());
     for &frame in frames {
-        let film = Film::new(s.width, s.height, mode, settings.spectral_bins);
+        let film = Film::new(s.width, s.height, mode, settings.spectral_bins, settings.denoising_passes);
         let monitor = Monitor::new(&settings.errors, frame, s.width, s.height, settings.alpha)?;
         active.push(FrameInProgress { frame, film, monitor, stats: PassStats::default(), elapsed_s: 0.0 });
         // Without a shutter every pass of a frame sees the same instant: pose it once.
@@ -527,6 +532,13 @@ fn render_block(
                 let (scene, accel) = posed.parts();
                 let (_, estimates, stats) = Renderer::new(scene, accel, s.clone()).run_pass(pass);
                 add_pass(frame, &samples, &estimates, stats);
+            }
+        }
+        if settings.denoising_passes {
+            for (frame, posed) in active.iter_mut().zip(&poses) {
+                let (scene, accel) = posed.parts();
+                let guides = Renderer::new(scene, accel, s.clone()).trace_guides(&samples);
+                frame.film.add_guides(&samples.wavelengths, guides.iter().map(|g| (g.albedo, g.normal)));
             }
         }
         drop(poses);

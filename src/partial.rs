@@ -16,7 +16,7 @@ use glam::DVec3;
 use serde::{Deserialize, Serialize};
 use sha2::{Digest, Sha256};
 
-use crate::film::{Film, FilmMode};
+use crate::film::{Film, FilmMode, GUIDE_SUMS, PIXEL_SUMS};
 
 /// The first bytes of a partial file.
 const MAGIC: &[u8] = b"CAUSTIC-PARTIAL\n";
@@ -91,7 +91,7 @@ pub fn scene_sha256(path: &Path) -> Result<String, String> {
 pub fn write(path: &Path, header: &PartialHeader, film: &Film) -> Result<(), String> {
     let fail = |e: std::io::Error| format!("cannot write {}: {e}", path.display());
     let json = serde_json::to_vec(header).expect("a header serialises");
-    let mut bytes = Vec::with_capacity(MAGIC.len() + 8 + json.len() + film.pixels.len() * 8 * crate::film::PIXEL_SUMS);
+    let mut bytes = Vec::with_capacity(MAGIC.len() + 8 + json.len() + film.pixels.len() * 8 * PIXEL_SUMS);
     bytes.extend_from_slice(MAGIC);
     bytes.extend_from_slice(&(json.len() as u64).to_le_bytes());
     bytes.extend_from_slice(&json);
@@ -160,11 +160,13 @@ fn film_of(header: &PartialHeader, body: &[u8]) -> Option<Film> {
         None => FilmMode::Spectral,
     };
     let bins = settings["spectral_bins"].as_u64()? as usize;
+    let guides = settings["denoising_passes"].as_bool().unwrap_or(false);
     let [width, height] = header.size;
-    if u64::from(width) * u64::from(height) * 8 * (7 + bins as u64) != body.len() as u64 {
+    let per_pixel = PIXEL_SUMS + bins + if guides { GUIDE_SUMS } else { 0 };
+    if u64::from(width) * u64::from(height) * 8 * per_pixel as u64 != body.len() as u64 {
         return None;
     }
-    let mut film = Film::new(width, height, mode, bins);
+    let mut film = Film::new(width, height, mode, bins, guides);
     let sums: Vec<f64> =
         body.chunks_exact(8).map(|b| f64::from_le_bytes(b.try_into().expect("8 bytes"))).collect();
     film.set_pixel_sums(&sums)?;

@@ -100,3 +100,35 @@ fn a_crop_is_the_same_pixels_as_the_whole_image() {
     let message = frames::render(&beyond).err().expect("a crop beyond the image is refused");
     assert!(message.contains("--crop 40,0,10,10 reaches beyond the 48x36 image"), "{message}");
 }
+
+/// Denoising guides (`--denoising-passes`): the ground's albedo and the world's 1 in Cycles'
+/// Denoising Albedo, the ground's normal in view space in Denoising Normal, and the image itself
+/// the same bits as without them.
+#[test]
+fn denoising_passes_hold_the_albedo_and_normal_the_camera_sees() {
+    let dir = tempfile::tempdir().unwrap();
+    let mut gltf = GltfBuilder::default();
+    let ground = gltf.material(diffuse([0.5, 0.25, 0.125]));
+    gltf.quad_y("Ground", 0.0, 20.0, true, ground);
+    // Looking down at 45 degrees: the ground's up normal is (0, cos 45, sin 45) in view space.
+    gltf.camera([0.0, 1.0, 3.0], [0.0, -1.0, -1.0], 0.6);
+    gltf.scene_extras(json!({"resolution": [16, 16], "world": {"color": [1.0, 1.0, 1.0]}}));
+    let path = gltf.write(dir.path(), "ground");
+    let plain = frames::render(&settings(&path, &dir.path().join("plain"), 64)).unwrap();
+    let guided_settings = RenderSettings { denoising_passes: true, ..settings(&path, &dir.path().join("guided"), 64) };
+    let guided = frames::render(&guided_settings).unwrap();
+    let (plain, guided_image) = (read_exr(&plain.frames[0].path), read_exr(&guided.frames[0].path));
+    assert_eq!(plain.rgb, guided_image.rgb, "the guides change nothing in the image");
+    let channels = exr_channels(&guided.frames[0].path);
+    let channel = |name: &str| channels.iter().find(|(n, _)| n == name).unwrap_or_else(|| panic!("no {name}")).1.clone();
+    let mean = |values: &[f32]| values.iter().map(|&v| f64::from(v)).sum::<f64>() / values.len() as f64;
+    for (c, expected) in [("R", 0.5), ("G", 0.25), ("B", 0.125)] {
+        let albedo = mean(&channel(&format!("Denoising Albedo.{c}")));
+        assert!((albedo / expected - 1.0).abs() < 0.05, "albedo {c}: {albedo} against {expected}");
+    }
+    let half = std::f64::consts::FRAC_1_SQRT_2;
+    for (c, expected) in [("X", 0.0), ("Y", half), ("Z", half)] {
+        let normal = mean(&channel(&format!("Denoising Normal.{c}")));
+        assert!((normal - expected).abs() < 0.01, "normal {c}: {normal} against {expected}");
+    }
+}

@@ -7,6 +7,7 @@
 mod direct;
 mod gather;
 mod grid;
+mod guides;
 mod media;
 mod pass;
 mod photons;
@@ -16,6 +17,7 @@ mod see_through;
 mod shared;
 mod visible;
 
+pub use guides::Guide;
 pub use photons::Photon;
 pub use renderer::{Crop, PassSamples, PassStats, PixelEstimate, Renderer, SppmSettings, VisiblePoint, MAX_DEPTH};
 pub use shared::{run_shared_pass, SharedPassOutput};

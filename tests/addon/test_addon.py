@@ -210,6 +210,57 @@ class StillRenders(unittest.TestCase):
         self.assertLess(errors[-1], errors[0], "the error falls")
         self.assertTrue(all(0.0 <= f <= 1.0 for f in fractions if f is not None), fractions[-5:])
 
+    def test_denoise_lowers_the_error_at_16_passes(self):
+        """The Denoise option (Blender's Denoise node on Caustic's albedo and normal passes, set up
+        in the compositor) brings a 16-pass render of a rough metal ball on a floor under a large
+        soft light (whose noise is each pixel's own: light samples, paths through the metal's
+        lobe) closer to a 512-pass one: its relative MSE at least halves."""
+        scene = clear_scene()
+        add(bpy.ops.mesh.primitive_plane_add, material("Floor"), size=8)
+        metal = material("Metal", (0.9, 0.7, 0.4))
+        metal.node_tree.nodes["Principled BSDF"].inputs["Metallic"].default_value = 1.0
+        metal.node_tree.nodes["Principled BSDF"].inputs["Roughness"].default_value = 0.3
+        add(bpy.ops.mesh.primitive_uv_sphere_add, metal, segments=48, ring_count=24, radius=0.8, location=(0, 0, 0.8))
+        bpy.ops.object.shade_smooth()
+        light = add(bpy.ops.object.light_add, type='AREA', location=(-1.5, -1.0, 3.0))
+        light.data.size, light.data.energy = 3.0, 300.0
+        look_at(light, (0, 0, 0))
+        camera((0, -4, 2.5), (0, 0, 0.6))
+        scene.caustic.passes = 512
+        reference = render_still("denoise_reference")
+        scene.caustic.passes = 16
+        noisy = render_still("denoise_noisy")
+        scene.caustic.denoise = True
+        try:
+            self.assertEqual(scene.compositing_node_group.name, "Caustic Denoise")
+            denoised = render_still("denoise_denoised")
+        finally:
+            scene.caustic.denoise, scene.compositing_node_group = False, None
+        relative_mse = {name: float(((image - reference) ** 2 / (reference ** 2 + 1e-2)).mean())
+                        for name, image in (("noisy", noisy), ("denoised", denoised))}
+        print(f"relative MSE against 512 passes: {relative_mse}")
+        self.assertLess(relative_mse["denoised"], 0.5 * relative_mse["noisy"])
+
+    def test_a_multilayer_exr_keeps_every_pass(self):
+        """Render Animation saved as multilayer EXR by Blender holds Combined, Error and, with
+        Denoise, the denoising passes."""
+        scene = glass_sphere_scene()
+        scene.caustic.passes = 4
+        settings = scene.render.image_settings
+        settings.media_type, settings.file_format = 'MULTI_LAYER_IMAGE', 'OPEN_EXR_MULTILAYER'
+        scene.caustic.denoise = True
+        try:
+            scene.render.filepath = str(OUT / "multilayer" / "frame_")
+            bpy.ops.render.render(animation=True)
+        finally:
+            scene.caustic.denoise, scene.compositing_node_group = False, None
+            settings.media_type, settings.file_format = 'IMAGE', 'OPEN_EXR'
+        written = OUT / "multilayer" / "frame_0001.exr"
+        channels = {name for part in OpenEXR.File(str(written)).parts for name in part.channels}
+        for name in ("ViewLayer.Combined", "ViewLayer.Error.Y", "ViewLayer.Denoising Albedo",
+                     "ViewLayer.Denoising Normal.X", "ViewLayer.Denoising Normal.Z"):
+            self.assertIn(name, channels)
+
     def test_dispersive_prism_separates_colours(self):
         """The dispersion regression prism (scenes/prism.gltf, imported): with the SF11 glass from the
         material's Caustic settings, the band's red and blue centroids lie pixels apart; with a
