@@ -1,6 +1,6 @@
 """The scene as glTF 2.0 through Blender's own exporter, plus what the exporter drops, written into
 the `caustic` extras (docs/extras.md) by the exporter's hooks while Caustic exports: area lights,
-the sun's angle, point lights' radius, lights' colour temperature, the camera's depth of field, the shutter, the frame
+the sun's angle, point lights' radius, spot lights' blend, lights' colour temperature, the camera's depth of field, the shutter, the frame
 rate, the resolution (with its percentage), the active camera, the world (its colour, or an
 Environment Texture's image written beside the scene as a linear EXR), dispersion and volume
 priorities; and a glass's volume absorption as `KHR_materials_volume` (`volume_absorption`).
@@ -289,6 +289,8 @@ def node_extras(blender_object):
             extras["sun_angle_deg"] = math.degrees(light.angle)
         if light.type == 'POINT' and light.shadow_soft_size > 0:
             extras["radius"] = light.shadow_soft_size
+        if light.type == 'SPOT':
+            extras["spot_blend"] = light.spot_blend
         if light.name in _temperatures:
             extras["temperature_k"] = _temperatures[light.name]
         return extras or None

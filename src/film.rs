@@ -387,7 +387,7 @@ mod tests {
 
     /// Adds `passes` passes in which every pixel sees `radiance(lambda)`.
     fn film_of(passes: u64, radiance: impl Fn(f32) -> f32) -> Film {
-        let mut film = Film::new(2, 1, FilmMode::Spectral, 0);
+        let mut film = Film::new(2, 1, FilmMode::Spectral, 0, false);
         for i in 0..passes {
             let lambda = Wavelengths::sampled(pass_sample(5, i));
             let pixel =
@@ -408,7 +408,7 @@ mod tests {
     #[test]
     fn one_wavelength_shows_white_as_luminance_one_in_its_own_colour() {
         for lambda in [450.0, 550.0, 650.0] {
-            let mut film = Film::new(1, 1, FilmMode::Monochromatic { lambda_nm: lambda }, 0);
+            let mut film = Film::new(1, 1, FilmMode::Monochromatic { lambda_nm: lambda }, 0, false);
             let white = SampledSpectrum::splat(0.5 * d65(lambda));
             film.add_pass(
                 &Wavelengths::single(lambda, 1.0),
@@ -430,7 +430,7 @@ mod tests {
 
     #[test]
     fn spectral_bins_average_the_spectral_radiance_of_their_band() {
-        let mut film = Film::new(1, 1, FilmMode::Spectral, 47);
+        let mut film = Film::new(1, 1, FilmMode::Spectral, 47, false);
         for i in 0..10_000 {
             let lambda = Wavelengths::sampled(pass_sample(9, i));
             film.add_pass(&lambda, 0.1, [(SampledSpectrum::splat(2.0), SampledSpectrum::ZERO, 1.0)].into_iter());

@@ -149,12 +149,18 @@ fn volume_seed() -> Value {
     gltf.to_json()
 }
 
-/// A scene with every camera input Caustic reads: an orthographic camera, a shifted perspective
-/// one with a lens, and a panorama on a node of its own, which the scene's extras choose.
+/// A scene with every camera input Caustic reads (an orthographic camera, a shifted perspective
+/// one with a lens, and a panorama on a node of its own, which the scene's extras choose) and the
+/// film's and lights' newer ones (a transparent film, a holdout, a spot with Blender's blend).
 fn camera_seed() -> Value {
     let mut gltf = common::GltfBuilder::default();
     let grey = gltf.material(common::diffuse([0.5, 0.5, 0.5]));
     gltf.sphere("Ball", [0.0, 0.0, -3.0], 0.5, 12, grey);
+    gltf.sphere("Hole", [1.0, 0.0, -3.0], 0.3, 8, grey);
+    gltf.set_node_extras(gltf.last_node(), json!({"holdout": true}));
+    let spot = json!({"type": "spot", "intensity": 500.0, "spot": {"innerConeAngle": 0.2, "outerConeAngle": 0.5}});
+    gltf.light(spot, [0.0, 2.0, -3.0], [0.0, -1.0, 0.0]);
+    gltf.set_node_extras(gltf.last_node(), json!({"spot_blend": 0.4}));
     let ortho = json!({"type": "orthographic", "orthographic": {"xmag": 2.0, "ymag": 1.5, "znear": 0.01, "zfar": 50.0}});
     gltf.camera_of(ortho, [0.0, 0.0, 2.0], [0.0, 0.0, -1.0]);
     gltf.camera([0.0, 1.0, 2.0], [0.0, -0.3, -1.0], 0.7);
@@ -162,7 +168,7 @@ fn camera_seed() -> Value {
     gltf.set_node_extras(gltf.last_node(), json!({"shift": [0.1, -0.2], "lens": lens}));
     let panorama = json!({"panorama": {"longitude_deg": [-120.0, 90.0], "latitude_deg": [-45.0, 60.0]}});
     gltf.extras_node("Panorama", panorama, [0.0, 0.0, 0.0], [0.0, 0.0, -1.0]);
-    gltf.scene_extras(json!({"camera": "Panorama", "world": {"color": [1.0, 1.0, 1.0]}}));
+    gltf.scene_extras(json!({"camera": "Panorama", "world": {"color": [1.0, 1.0, 1.0]}, "transparent_film": true}));
     gltf.to_json()
 }
 

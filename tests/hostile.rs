@@ -367,6 +367,10 @@ fn impossible_cameras_are_refused() {
         });
         assert_refused(&path, &["extras `caustic.panorama`", "latitudes from low to high"]);
     }
+    let spot = furnace_edited(dir.path(), "spot.gltf", |doc| {
+        doc["nodes"][0]["extras"] = json!({"caustic": {"spot_blend": 1.5}});
+    });
+    assert_refused(&spot, &["node 'Enclosure'", "`caustic.spot_blend`: expected a blend from 0 to 1, got 1.5"]);
 }
 
 /// Hostile texture references and attributes render with a warning naming the material or mesh:

@@ -45,7 +45,7 @@ pub enum Light {
         /// Radiant intensity spectrum shape, W/sr.
         intensity: RgbSpectrum,
     },
-    /// A spot light: a point light inside a cone, with glTF's smooth falloff.
+    /// A spot light: a point light inside a cone, with glTF's or Blender's smooth falloff.
     Spot {
         /// Position.
         position: Vec3,
@@ -53,8 +53,8 @@ pub enum Light {
         axis: Vec3,
         /// Radiant intensity on the axis, W/sr.
         intensity: RgbSpectrum,
-        /// The inner cone (full intensity inside).
-        inner: Cone,
+        /// How it falls off toward the cone's edge.
+        falloff: SpotFalloff,
         /// The outer cone (no light outside).
         outer: Cone,
     },
@@ -238,14 +238,36 @@ fn spectral(shape: &RgbSpectrum, lambda: &Wavelengths) -> SampledSpectrum {
     shape.eval_lanes(lambda.nm) * lambda.d65
 }
 
-/// glTF's spot falloff: the square of a linear ramp in cosine between the outer and inner cone,
-/// for a direction whose `1 - cos` from the axis is `one_minus_cos`.
-fn spot_falloff(one_minus_cos: f32, inner: Cone, outer: Cone) -> f32 {
-    let width = outer.one_minus_cos - inner.one_minus_cos;
+/// How a spot light dims toward the edge of its cone.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub enum SpotFalloff {
+    /// glTF's: the square of a linear ramp in cosine from the outer cone to this inner one.
+    Gltf {
+        /// The inner cone (full intensity inside).
+        inner: Cone,
+    },
+    /// Blender's Spot Blend, as Cycles renders it: a smoothstep in cosine over the last `blend`
+    /// of the cone's `1 - cos` (0: a hard edge).
+    Blender {
+        /// Blender's Spot Blend, in [0, 1].
+        blend: f32,
+    },
+}
+
+/// The spot falloff for a direction whose `1 - cos` from the axis is `one_minus_cos`.
+fn spot_falloff(one_minus_cos: f32, falloff: SpotFalloff, outer: Cone) -> f32 {
+    let width = match falloff {
+        SpotFalloff::Gltf { inner } => outer.one_minus_cos - inner.one_minus_cos,
+        SpotFalloff::Blender { blend } => outer.one_minus_cos * blend,
+    };
     if width <= 0.0 {
         return if one_minus_cos <= outer.one_minus_cos { 1.0 } else { 0.0 };
     }
-    ((outer.one_minus_cos - one_minus_cos) / width).clamp(0.0, 1.0).powi(2)
+    let t = ((outer.one_minus_cos - one_minus_cos) / width).clamp(0.0, 1.0);
+    match falloff {
+        SpotFalloff::Gltf { .. } => t * t,
+        SpotFalloff::Blender { .. } => t * t * (3.0 - 2.0 * t),
+    }
 }
 
 /// A point on the disc of `sphere` facing `direction`, upstream of the scene.
@@ -299,9 +321,9 @@ impl Light {
                 let radiance_over_pdf = spectral(intensity, lambda) / (distance * distance);
                 Some(LightSample { wi, distance, radiance_over_pdf, pdf: 0.0 })
             }
-            Light::Spot { position, axis, intensity, inner, outer } => {
+            Light::Spot { position, axis, intensity, falloff, outer } => {
                 let (wi, distance) = direction_and_distance(p, *position)?;
-                let falloff = spot_falloff(one_minus_cos_between(-wi, *axis), *inner, *outer);
+                let falloff = spot_falloff(one_minus_cos_between(-wi, *axis), *falloff, *outer);
                 let radiance_over_pdf = spectral(intensity, lambda) * falloff / (distance * distance);
                 (falloff > 0.0).then_some(LightSample { wi, distance, radiance_over_pdf, pdf: 0.0 })
             }
@@ -379,10 +401,10 @@ impl Light {
                 direction: square_to_sphere(u_direction),
                 flux: spectral(intensity, lambda) * 4.0 * PI,
             },
-            Light::Spot { position, axis, intensity, inner, outer } => {
+            Light::Spot { position, axis, intensity, falloff, outer } => {
                 let (t, b) = basis(*axis);
                 let local = square_to_cone(u_direction, outer.one_minus_cos);
-                let falloff = spot_falloff(u_direction.x * outer.one_minus_cos, *inner, *outer);
+                let falloff = spot_falloff(u_direction.x * outer.one_minus_cos, *falloff, *outer);
                 let solid_angle = outer.solid_angle();
                 EmittedPhoton {
                     origin: *position,
@@ -446,6 +468,19 @@ fn direction_and_distance(p: Vec3, q: Vec3) -> Option<(Vec3, f32)> {
 
 #[cfg(test)]
 mod tests {
+    #[test]
+    fn blenders_spot_blend_is_a_smoothstep_over_the_cones_last_share() {
+        let outer = Cone::from_half_angle(0.6);
+        let blender = SpotFalloff::Blender { blend: 0.5 };
+        let at = |share: f32| spot_falloff(outer.one_minus_cos * share, blender, outer);
+        assert_eq!(at(1.01), 0.0);
+        assert_eq!(at(0.4), 1.0);
+        // Halfway through the blended last half of 1 - cos: smoothstep(0.5) = 0.5; a quarter: 0.15625.
+        assert!((at(0.75) - 0.5).abs() < 1e-5, "{}", at(0.75));
+        assert!((at(0.875) - 0.15625).abs() < 1e-5, "{}", at(0.875));
+        assert_eq!(spot_falloff(outer.one_minus_cos * 0.99, SpotFalloff::Blender { blend: 0.0 }, outer), 1.0);
+    }
+
     use super::*;
 
     #[test]

@@ -10,7 +10,7 @@ use super::TriangleRef;
 pub use crate::camera::Lens;
 use crate::camera::Projection;
 use crate::geometry::Cone;
-use crate::lights::World;
+use crate::lights::{SpotFalloff, World};
 use crate::materials::Material;
 use crate::spectrum::RgbSpectrum;
 
@@ -39,7 +39,7 @@ pub enum PunctualKind {
     /// Radiant intensity, W/sr.
     Point(RgbSpectrum),
     /// Radiant intensity on the axis and the cones.
-    Spot(RgbSpectrum, Cone, Cone),
+    Spot(RgbSpectrum, SpotFalloff, Cone),
     /// Irradiance, W/m^2, and the sun's disc.
     Sun(RgbSpectrum, Cone),
 }

@@ -121,6 +121,9 @@ pub struct NodeExtras {
     pub area_light: Option<AreaLightExtras>,
     /// The angular diameter of the node's sun light, in degrees (soft shadows).
     pub sun_angle_deg: Option<f32>,
+    /// Blender's Spot Blend of the node's spot light, in [0, 1]: its falloff is then Blender's
+    /// smoothstep rather than glTF's ramp between the cones.
+    pub spot_blend: Option<f32>,
     /// The radius of the node's point light (Blender's): it becomes an emitting sphere.
     pub radius: Option<f32>,
     /// The colour temperature of the node's light, kelvin (Blender's `use_temperature`): its

@@ -29,7 +29,7 @@ use super::gltf_materials::material;
 use super::{shapes, tangents, SceneError, TriangleRef, VertexExtras};
 use crate::camera::Projection;
 use crate::geometry::Cone;
-use crate::lights::World;
+use crate::lights::{SpotFalloff, World};
 use crate::materials::{BaseColour, Material};
 use crate::spectrum::{blackbody_colour, Dispersion, RgbSpectrum};
 
@@ -326,6 +326,9 @@ impl Builder<'_> {
             self.add_camera(None, node.index(), name, &extras)?;
         }
         let tint = light_tint(&extras, name)?;
+        if let Some(blend) = extras.spot_blend.filter(|b| !(0.0..=1.0).contains(b)) {
+            return Err(format!("node '{name}' extras `caustic.spot_blend`: expected a blend from 0 to 1, got {blend}"));
+        }
         if let Some(light) = node.light() {
             match (light.kind(), extras.radius) {
                 (_, Some(radius)) if !(radius >= 0.0 && radius.is_finite()) => {
@@ -433,11 +436,13 @@ impl Builder<'_> {
         let spectrum = RgbSpectrum::illuminant(colour);
         let kind = match light.kind() {
             Kind::Point => PunctualKind::Point(spectrum),
-            Kind::Spot { inner_cone_angle, outer_cone_angle } => PunctualKind::Spot(
-                spectrum,
-                Cone::from_half_angle(inner_cone_angle),
-                Cone::from_half_angle(outer_cone_angle),
-            ),
+            Kind::Spot { inner_cone_angle, outer_cone_angle } => {
+                let falloff = match extras.spot_blend {
+                    Some(blend) => SpotFalloff::Blender { blend },
+                    None => SpotFalloff::Gltf { inner: Cone::from_half_angle(inner_cone_angle) },
+                };
+                PunctualKind::Spot(spectrum, falloff, Cone::from_half_angle(outer_cone_angle))
+            }
             Kind::Directional => PunctualKind::Sun(spectrum, sun_disc(extras)),
         };
         self.lights.push(PunctualLight { node, kind });

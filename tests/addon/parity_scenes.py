@@ -526,6 +526,31 @@ def film_and_holdouts():
 # an object that should not render shows).
 ALPHA = {"film_and_holdouts"}
 
+def spot_light():
+    """A spot light of 70 degrees with Blender's Spot Blend 0.6 above a floor and a ball: the
+    pool of light and its soft edge."""
+    clear()
+    add(bpy.ops.mesh.primitive_plane_add, principled("Floor", Base_Color=(0.8, 0.8, 0.8, 1.0), Roughness=1.0,
+                                                     Specular_IOR_Level=0.0), index=1, size=20)
+    add(bpy.ops.mesh.primitive_uv_sphere_add, principled("Grey", Base_Color=(0.5, 0.5, 0.5, 1.0), Roughness=1.0,
+                                                         Specular_IOR_Level=0.0),
+        index=2, segments=48, ring_count=24, radius=0.5, location=(0.8, 0.3, 0.5))
+    bpy.ops.object.shade_smooth()
+    world((0.01, 0.01, 0.01))
+    spot = add(bpy.ops.object.light_add, type='SPOT', location=(0.0, 0.0, 3.0))
+    spot.data.energy, spot.data.shadow_soft_size = 1000.0, 0.0
+    spot.data.spot_size, spot.data.spot_blend = math.radians(70), 0.6
+    camera((0.0, -6.0, 5.0), (0.0, 0.0, 0.0))
+    return {"Floor": 1, "Grey": 2, "Edge": floor_ring((0.0, 0.0), 1.2, 2.1)}
+
+
+def floor_ring(centre, inner, outer, floor_index=1):
+    """The floor's pixels (rim left out) between `inner` and `outer` of `centre` (x, y on the
+    floor), for the current camera."""
+    outside, within = floor_disc(centre, inner, floor_index), floor_disc(centre, outer, floor_index)
+    return lambda index, reference: within(index, reference) & ~outside(index, reference)
+
+
 # Scenes whose dark silhouettes (pixels under half the world's brightness) must match Cycles' within a pixel.
 SILHOUETTES = {"ortho_camera", "shifted_camera", "panorama_camera"}
 
@@ -545,4 +570,5 @@ COLOURS = {"glass": {"Tinted light": 0.03}, "warm_light": {"Floor": 0.03, "Grey"
 SCENES = {"glass": glass, "principled_spheres": principled_spheres, "textured": textured, "normal_mapped": normal_mapped,
           "coated": coated, "sheen": sheen, "leaf": leaf, "warm_light": warm_light, "soft_light": soft_light,
           "hdri": hdri, "ortho_camera": ortho_camera, "shifted_camera": shifted_camera,
-          "panorama_camera": panorama_camera, "film_and_holdouts": film_and_holdouts}
+          "panorama_camera": panorama_camera, "film_and_holdouts": film_and_holdouts,
+          "spot_light": spot_light}

@@ -158,6 +158,9 @@ class Parity(unittest.TestCase):
     def test_film_and_holdouts(self):
         self.check("film_and_holdouts")
 
+    def test_spot_light(self):
+        self.check("spot_light")
+
     def test_hdri(self):
         self.check("hdri")
 
