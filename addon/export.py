@@ -1,9 +1,9 @@
 """The scene as glTF 2.0 through Blender's own exporter, plus what the exporter drops, written into
 the `caustic` extras (docs/extras.md) by the exporter's hooks while Caustic exports: area lights,
 the sun's angle, point lights' radius, spot lights' blend, lights' colour temperature, the camera's depth of field, the shutter, the frame
-rate, the resolution (with its percentage), the active camera, the world (its colour, or an
-Environment Texture's image written beside the scene as a linear EXR), dispersion and volume
-priorities; and a glass's volume absorption as `KHR_materials_volume` (`volume_absorption`).
+rate, the resolution (with its percentage), the active camera, the world (its colour, an
+Environment Texture's image written beside the scene as a linear EXR, or an image of any other
+world baked by Blender: `bake_world`), dispersion and volume priorities; and a glass's volume absorption as `KHR_materials_volume` (`volume_absorption`).
 
 The hooks change nothing in the user's data: they add extras to what is being written, and
 complete two values of the layers the exporter leaves out (`complete_layers`). Lights with a colour
@@ -51,61 +51,51 @@ def linked_node(socket):
     return None
 
 
-def world_nodes(world):
-    """The nodes Caustic renders of `world`'s node tree: its Background, the Environment Texture
-    feeding the Background's Color (or None) and the Mapping node turning it (or None), with what
-    it cannot render as sentences."""
+class WorldPlan:
+    """How Caustic renders a world: a uniform colour, an Environment Texture's image (through a
+    Mapping node's turn about Z), or, for any other node tree, an image of the world that
+    Blender bakes (`bake_world`)."""
+
+    def __init__(self, background=None, environment=None, mapping=None, bake=False):
+        self.background, self.environment, self.mapping, self.bake = background, environment, mapping, bake
+
+
+def world_plan(world):
+    """The plan for `world`'s node tree: read node by node where it is a Background of a colour
+    or of an equirectangular Environment Texture (turned about Z at most), else baked."""
     tree = world.node_tree if world is not None else None
-    if tree is None:
-        return None, None, None, []
-    name = f"world '{world.name}'"
-    output = next((n for n in tree.nodes if n.type == 'OUTPUT_WORLD' and n.is_active_output), None)
+    output = next((n for n in tree.nodes if n.type == 'OUTPUT_WORLD' and n.is_active_output), None) if tree else None
     surface = linked_node(output.inputs["Surface"]) if output is not None else None
     if surface is None:
-        return None, None, None, []
-    background = surface
-    warnings = []
-    if surface.type != 'BACKGROUND':
-        background = next((n for n in tree.nodes if n.type == 'BACKGROUND'), None)
-        instead = f"the Background '{background.name}' is rendered" if background else "the world is black"
-        warnings.append(f"{name}: its {surface.name} node is not rendered; {instead}")
-        if background is None:
-            return None, None, None, warnings
-    if background.inputs["Strength"].is_linked:
-        warnings.append(f"{name}: the Background's Strength is linked; its unlinked value is rendered")
-    colour = linked_node(background.inputs["Color"])
+        return WorldPlan()
+    if surface.type != 'BACKGROUND' or surface.inputs["Strength"].is_linked:
+        return WorldPlan(bake=True)
+    colour = linked_node(surface.inputs["Color"])
     if colour is None:
-        return background, None, None, warnings
-    if colour.type != 'TEX_ENVIRONMENT':
-        warnings.append(f"{name}: the Background's Color comes from {colour.name}, which is not rendered "
-                        "(an Environment Texture is); its unlinked colour is rendered")
-        return background, None, None, warnings
-    if colour.projection != 'EQUIRECTANGULAR':
-        warnings.append(f"{name}: the Environment Texture's {colour.projection} projection is rendered as "
-                        "equirectangular")
+        return WorldPlan(background=surface)
+    if colour.type != 'TEX_ENVIRONMENT' or colour.projection != 'EQUIRECTANGULAR' or colour.image is None:
+        return WorldPlan(bake=True)
     mapping = linked_node(colour.inputs["Vector"])
-    if mapping is not None and mapping.type != 'MAPPING':
-        warnings.append(f"{name}: the Environment Texture's Vector comes from {mapping.name}, which is not "
-                        "rendered (a Mapping node's rotation about Z is)")
-        mapping = None
-    if mapping is not None:
-        warnings += mapping_warnings(mapping, name)
-    return background, colour, mapping, warnings
+    if mapping is not None and not turns_about_z(mapping):
+        return WorldPlan(bake=True)
+    return WorldPlan(background=surface, environment=colour, mapping=mapping)
 
 
-def mapping_warnings(mapping, name):
-    """What of a world's Mapping node Caustic does not render (all but a rotation about Z)."""
+def turns_about_z(mapping):
+    """Whether a node is a Mapping node that only turns directions about Z (fed by texture
+    coordinates or nothing else)."""
+    if mapping.type != 'MAPPING':
+        return False
     inputs = mapping.inputs
-    warnings = [f"{name}: the Mapping node's {socket.name} is linked; its unlinked value is rendered"
-                for socket in inputs if socket.is_linked and socket.name != "Vector"]
+    if any(socket.is_linked for socket in inputs if socket.name != "Vector"):
+        return False
+    source = linked_node(inputs["Vector"])
+    if source is not None and source.type != 'TEX_COORD':
+        return False
     rotation = inputs["Rotation"].default_value
-    if abs(rotation[0]) > 1e-6 or abs(rotation[1]) > 1e-6:
-        warnings.append(f"{name}: the Mapping node's rotation about X and Y is not rendered (about Z is)")
-    if mapping.vector_type in ('POINT', 'TEXTURE') and any(abs(c) > 1e-6 for c in inputs["Location"].default_value):
-        warnings.append(f"{name}: the Mapping node's Location is not rendered")
-    if "Scale" in inputs and any(abs(c - 1.0) > 1e-6 for c in inputs["Scale"].default_value):
-        warnings.append(f"{name}: the Mapping node's Scale is not rendered")
-    return warnings
+    moved = mapping.vector_type in ('POINT', 'TEXTURE') and any(abs(c) > 1e-6 for c in inputs["Location"].default_value)
+    scaled = "Scale" in inputs and any(abs(c - 1.0) > 1e-6 for c in inputs["Scale"].default_value)
+    return abs(rotation[0]) <= 1e-6 and abs(rotation[1]) <= 1e-6 and not moved and not scaled
 
 
 def environment_rotation_deg(mapping):
@@ -166,23 +156,48 @@ def render_region(scene):
 
 
 def world_extras(world, folder):
-    """The world: an environment image (written into `folder`) with its rotation and the
-    Background's strength, or the Background's colour and strength (or the world's colour)."""
+    """The world: an environment image (written or baked into `folder`) with its rotation and
+    the Background's strength, or the Background's colour and strength (or the world's colour)."""
     if world is None:
         return None
     if world.node_tree is None:
         return {"color": list(world.color), "strength": 1.0}
-    background, environment, mapping, _ = world_nodes(world)
-    if background is None:
+    plan = world_plan(world)
+    if plan.bake:
+        return {"image": bake_world(world, folder), "strength": 1.0}
+    if plan.background is None:
         return {"color": [0.0, 0.0, 0.0], "strength": 1.0}
-    strength = background.inputs["Strength"].default_value
-    if environment is None:
-        colour = background.inputs["Color"].default_value
+    strength = plan.background.inputs["Strength"].default_value
+    if plan.environment is None:
+        colour = plan.background.inputs["Color"].default_value
         return {"color": [colour[0], colour[1], colour[2]], "strength": strength}
-    if environment.image is None:
-        raise RuntimeError(f"the world's Environment Texture '{environment.name}' has no image")
-    return {"image": write_environment(environment.image, folder), "strength": strength,
-            "rotation_deg": environment_rotation_deg(mapping)}
+    return {"image": write_environment(plan.environment.image, folder), "strength": strength,
+            "rotation_deg": environment_rotation_deg(plan.mapping)}
+
+
+# The width of a baked world's image (its height is half): 0.35 degrees a pixel.
+BAKED_WORLD_WIDTH = 1024
+
+
+def bake_world(world, folder, width=BAKED_WORLD_WIDTH):
+    """Renders `world` as Cycles sees it into `folder` as an equirectangular EXR, in a separate
+    Blender (a render cannot start inside a render; bake_world.py says how) and returns its file
+    name. The world travels in a .blend of its own."""
+    import subprocess
+    import sys
+    blend, image = folder / "world.blend", folder / "world.exr"
+    bpy.data.libraries.write(str(blend), {world}, fake_user=True)
+    script = pathlib.Path(__file__).resolve().parent / "bake_world.py"
+    arguments = ["--", str(blend), world.name, str(image), str(width)]
+    if bpy.app.binary_path:
+        command = [bpy.app.binary_path, "--background", "--factory-startup", "--python", str(script), *arguments]
+    else:  # Blender as a Python module: its Python imports bpy
+        command = [sys.executable, str(script), *arguments]
+    done = subprocess.run(command, capture_output=True, text=True)
+    if done.returncode != 0 or not image.exists():
+        reason = (done.stderr or done.stdout).strip().splitlines()[-1:] or ["no output"]
+        raise RuntimeError(f"Blender could not bake world '{world.name}' into an image: {reason[0]}")
+    return image.name
 
 
 def scene_extras(scene, world):
@@ -499,7 +514,6 @@ def scene_warnings(depsgraph):
     materials = {slot.material for obj in depsgraph.scene.objects if obj.type == 'MESH'
                  for slot in obj.material_slots if slot.material is not None}
     warnings = [w for m in sorted(materials, key=lambda m: m.name) for w in material_warnings(m)]
-    warnings += world_nodes(depsgraph.scene.world)[3]
     warnings += camera_warnings(depsgraph.scene)
     for light in {obj.data for obj in depsgraph.scene.objects if obj.type == 'LIGHT'}:
         if light.type == 'SPOT' and light.shadow_soft_size > 0:

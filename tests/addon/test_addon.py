@@ -497,15 +497,27 @@ class World(unittest.TestCase):
                                                   "cannot be read"):
             bpy.ops.render.render()
 
-    def test_world_nodes_caustic_does_not_render_are_named(self):
-        glass_sphere_scene()
-        world = bpy.data.worlds.new("Procedural")
+    def test_a_world_read_no_other_way_is_baked_by_blender(self):
+        """A Mix Shader of a red and a blue Background (a quarter blue) is baked by Cycles into an
+        equirectangular image beside the scene: three quarters red and a quarter blue everywhere."""
+        scene = glass_sphere_scene()
+        world = bpy.data.worlds.new("Mixed")
         nodes, links = world.node_tree.nodes, world.node_tree.links
-        links.new(nodes.new("ShaderNodeTexSky").outputs["Color"], nodes["Background"].inputs["Color"])
-        bpy.context.scene.world = world
-        warnings = sys.modules["caustic.export"].scene_warnings(bpy.context.evaluated_depsgraph_get())
-        self.assertIn("world 'Procedural': the Background's Color comes from Sky Texture, which is not rendered "
-                      "(an Environment Texture is); its unlinked colour is rendered", warnings)
+        red, blue, mix = nodes["Background"], nodes.new("ShaderNodeBackground"), nodes.new("ShaderNodeMixShader")
+        red.inputs["Color"].default_value, blue.inputs["Color"].default_value = (1, 0, 0, 1), (0, 0, 1, 1)
+        mix.inputs["Fac"].default_value = 0.25
+        links.new(red.outputs[0], mix.inputs[1])
+        links.new(blue.outputs[0], mix.inputs[2])
+        links.new(mix.outputs[0], nodes["World Output"].inputs["Surface"])
+        scene.world = world
+        path = OUT / "baked" / "scene.gltf"
+        path.parent.mkdir()
+        sys.modules["caustic.export"].export(scene, path)
+        extras = json.loads(path.read_text())["scenes"][0]["extras"]["caustic"]["world"]
+        self.assertEqual(extras["image"], "world.exr")
+        pixels = next(iter(OpenEXR.File(str(path.parent / "world.exr")).channels().values())).pixels[..., :3]
+        self.assertEqual(pixels.shape[:2], (512, 1024))
+        np.testing.assert_allclose(pixels.reshape(-1, 3).mean(axis=0), [0.75, 0.0, 0.25], atol=0.005)
 
 
 if __name__ == "__main__":

@@ -161,6 +161,9 @@ class Parity(unittest.TestCase):
     def test_spot_light(self):
         self.check("spot_light")
 
+    def test_sky(self):
+        self.check("sky")
+
     def test_hdri(self):
         self.check("hdri")
 
