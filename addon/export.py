@@ -516,6 +516,9 @@ def scene_warnings(depsgraph):
     warnings = [w for m in sorted(materials, key=lambda m: m.name) for w in material_warnings(m)]
     warnings += camera_warnings(depsgraph.scene)
     for light in {obj.data for obj in depsgraph.scene.objects if obj.type == 'LIGHT'}:
+        if light.type == 'AREA' and light.spread < math.pi - 1e-4:
+            warnings.append(f"light '{light.name}': an area light's Spread is not rendered; it spreads over 180 "
+                            "degrees")
         if light.type == 'SPOT' and light.shadow_soft_size > 0:
             warnings.append(f"light '{light.name}': a spot light's radius is not rendered; it renders as a point")
         if light.type == 'POINT' and light.shadow_soft_size > 0 and getattr(light, "use_soft_falloff", False):

@@ -429,6 +429,19 @@ class Export(unittest.TestCase):
                       warnings)
         self.assertFalse([w for w in warnings if "'Glass'" in w], warnings)
 
+    def test_what_is_not_rendered_of_lights_and_cameras_is_named(self):
+        scene = glass_sphere_scene()
+        area = bpy.data.objects["Area"].data
+        area.spread = math.radians(60)
+        scene.camera.data.type, scene.camera.data.panorama_type = 'PANO', 'FISHEYE_EQUISOLID'
+        try:
+            warnings = sys.modules["caustic.export"].scene_warnings(bpy.context.evaluated_depsgraph_get())
+        finally:
+            area.spread, scene.camera.data.type = math.pi, 'PERSP'
+        self.assertIn("light 'Area': an area light's Spread is not rendered; it spreads over 180 degrees", warnings)
+        self.assertIn(f"camera '{scene.camera.name}': the FISHEYE_EQUISOLID panorama is not rendered (Equirectangular "
+                      "is); Caustic finds no camera to render with", warnings)
+
     def test_a_light_with_a_colour_temperature_exports_and_keeps_it(self):
         """Blender's glTF exporter raises on a light with a colour temperature; the add-on's export
         succeeds, writes the temperature in the light's extras and leaves the light as it was."""
