@@ -12,6 +12,8 @@ pub fn report(settings: &RenderSettings) -> Result<Value, String> {
     let dispersion = description.materials.iter().any(Material::is_dispersive);
     let absorption = description.materials.iter().any(|m| m.volume.is_some());
     let cut_away = description.materials.iter().any(|m| m.alpha.cuts());
+    let holdouts = description.materials.iter().any(|m| m.holdout);
+    let transparent_film = description.transparent_film;
     let fps = description.fps;
     let projection = description.camera.projection.name();
     let shot = Shot::new(settings, description)?;
@@ -23,6 +25,8 @@ pub fn report(settings: &RenderSettings) -> Result<Value, String> {
         "dispersion": dispersion,
         "absorption": absorption,
         "alpha": cut_away,
+        "holdouts": holdouts,
+        "transparent_film": transparent_film,
         "motion_blur": shutter.length > 0.0 && prepared.has_motion(),
         "depth_of_field": prepared.lens().is_some(),
         "moving_camera": prepared.camera_moves(),
