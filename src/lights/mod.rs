@@ -1,7 +1,8 @@
 //! Lights: emission, next-event estimation toward a point, and photon emission.
 //!
 //! Radiometric units (one place for all of them, DESIGN.md "Input"): every light's colour is an
-//! [`RgbSpectrum`] shape times D65 normalised to luminance 1, times a scalar in the unit below.
+//! [`Illuminant`]: an [`RgbSpectrum`] shape times D65 normalised to luminance 1 (or a black body's
+//! spectrum, for a colour temperature), times a scalar in the unit below.
 //! - point and spot: radiant intensity in W/sr (glTF candela / 683; Blender writes W / (4 pi) * 683);
 //! - sun: irradiance in W/m^2 on a plane facing it (glTF lux / 683);
 //! - emitting triangles (emissive meshes and area lights): radiance in W / (m^2 sr)
@@ -23,7 +24,7 @@ use crate::materials::{Alpha, SurfaceInputs};
 use crate::sampling::{
     basis, square_to_cone, square_to_cosine_hemisphere, square_to_disc, square_to_sphere, square_to_triangle,
 };
-use crate::spectrum::{RgbSpectrum, SampledSpectrum, Wavelengths};
+use crate::spectrum::{Illuminant, SampledSpectrum, Wavelengths};
 use crate::texture::{Texture, UV_SETS};
 
 /// The scene's bounding sphere, where distant lights start their photons.
@@ -42,8 +43,8 @@ pub enum Light {
     Point {
         /// Position.
         position: Vec3,
-        /// Radiant intensity spectrum shape, W/sr.
-        intensity: RgbSpectrum,
+        /// Radiant intensity spectrum, W/sr.
+        intensity: Illuminant,
     },
     /// A spot light: a point light inside a cone, with glTF's or Blender's smooth falloff.
     Spot {
@@ -52,7 +53,7 @@ pub enum Light {
         /// Unit axis of the cone (the direction light travels).
         axis: Vec3,
         /// Radiant intensity on the axis, W/sr.
-        intensity: RgbSpectrum,
+        intensity: Illuminant,
         /// How it falls off toward the cone's edge.
         falloff: SpotFalloff,
         /// The outer cone (no light outside).
@@ -63,7 +64,7 @@ pub enum Light {
         /// Unit direction the light travels.
         direction: Vec3,
         /// Irradiance on a plane facing the sun, W/m^2.
-        irradiance: RgbSpectrum,
+        irradiance: Illuminant,
         /// The sun's disc as a cone of directions (zero for a delta sun).
         disc: Cone,
         /// Where its photons start.
@@ -78,8 +79,8 @@ pub enum Light {
 /// What an emitting triangle emits: one radiance, or an emissive texture's across it.
 #[derive(Clone, Debug)]
 pub enum Emission {
-    /// The same radiance everywhere, W / (m^2 sr) (times D65).
-    Uniform(RgbSpectrum),
+    /// The same radiance everywhere, W / (m^2 sr).
+    Uniform(Illuminant),
     /// A texture of radiance spectra, read at the texture coordinates of the triangle's corners
     /// (boxed: every light's size is the largest variant's, and few triangles carry a texture).
     Textured(Box<TexturedEmission>),
@@ -233,9 +234,9 @@ pub struct EmittedPhoton {
     pub flux: SampledSpectrum,
 }
 
-/// The spectral value of a light's shape at the wavelengths `lambda`, D65 included.
-fn spectral(shape: &RgbSpectrum, lambda: &Wavelengths) -> SampledSpectrum {
-    shape.eval_lanes(lambda.nm) * lambda.d65
+/// The spectral value of a light's spectrum at the wavelengths `lambda`.
+fn spectral(spectrum: &Illuminant, lambda: &Wavelengths) -> SampledSpectrum {
+    spectrum.eval(lambda)
 }
 
 /// How a spot light dims toward the edge of its cone.
@@ -492,12 +493,12 @@ mod tests {
         let lights = [
             Light::Triangle(EmittingTriangle::new(
                 [c[0], c[2], c[1]],
-                Emission::Uniform(RgbSpectrum::constant(1.0)),
+                Emission::Uniform(Illuminant::d65(Vec3::ONE)),
                 false,
             )),
             Light::Triangle(EmittingTriangle::new(
                 [c[0], c[3], c[2]],
-                Emission::Uniform(RgbSpectrum::constant(1.0)),
+                Emission::Uniform(Illuminant::d65(Vec3::ONE)),
                 false,
             )),
         ];

@@ -19,7 +19,7 @@ use super::plastic::{self, Coat, Plastic};
 use super::sheen::Sheen;
 use super::volume::Volume;
 use super::{Bsdf, ShadingFrame, NARROW_COAT_ALPHA};
-use crate::spectrum::{Dispersion, RgbSpectrum, SampledSpectrum, Wavelengths};
+use crate::spectrum::{Dispersion, Illuminant, RgbSpectrum, SampledSpectrum, Wavelengths};
 use crate::texture::{DataTexture, Texture};
 
 /// Roughness below this is treated as perfectly smooth (a delta BSDF).
@@ -58,7 +58,7 @@ pub struct Material {
     /// `KHR_materials_dispersion` or a law from the `caustic` extras.
     pub ior: Dispersion,
     /// Emitted radiance shape (times D65) in W / (m^2 sr), or `None`.
-    pub emission: Option<RgbSpectrum>,
+    pub emission: Option<Illuminant>,
     /// The emissive texture with the emission's factor and strength baked in, which replaces
     /// `emission` where it is read.
     pub emission_texture: Option<Arc<Texture>>,
@@ -274,7 +274,7 @@ impl Material {
         let radiance = match (&self.emission, &self.emission_texture) {
             (Some(_), _) if !self.emits_both_sides && ng.dot(wo) <= 0.0 => Vec4::ZERO,
             (Some(_), Some(texture)) => texture.eval(&inputs.uv, lambda.nm) * lambda.d65,
-            (Some(spectrum), None) => spectrum.eval_lanes(lambda.nm) * lambda.d65,
+            (Some(spectrum), None) => spectrum.eval(lambda),
             (None, _) => Vec4::ZERO,
         };
         if self.alpha.cuts() {

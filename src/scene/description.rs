@@ -12,7 +12,7 @@ use crate::camera::Projection;
 use crate::geometry::Cone;
 use crate::lights::{SpotFalloff, World};
 use crate::materials::Material;
-use crate::spectrum::RgbSpectrum;
+use crate::spectrum::Illuminant;
 
 /// Triangles attached to a node, in the node's local space.
 #[derive(Clone, Debug)]
@@ -37,11 +37,11 @@ pub struct MeshInstance {
 #[derive(Clone, Debug)]
 pub enum PunctualKind {
     /// Radiant intensity, W/sr.
-    Point(RgbSpectrum),
+    Point(Illuminant),
     /// Radiant intensity on the axis and the cones.
-    Spot(RgbSpectrum, SpotFalloff, Cone),
+    Spot(Illuminant, SpotFalloff, Cone),
     /// Irradiance, W/m^2, and the sun's disc.
-    Sun(RgbSpectrum, Cone),
+    Sun(Illuminant, Cone),
 }
 
 /// A `KHR_lights_punctual` light on a node (it shines down the node's local -z).

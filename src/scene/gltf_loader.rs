@@ -31,7 +31,7 @@ use crate::camera::Projection;
 use crate::geometry::Cone;
 use crate::lights::{SpotFalloff, World};
 use crate::materials::{BaseColour, Material};
-use crate::spectrum::{blackbody_colour, Dispersion, RgbSpectrum};
+use crate::spectrum::{Dispersion, Illuminant, RgbSpectrum};
 
 /// glTF photometric units to watts: Blender writes W * 683 / (4 pi) candela and W/m^2 * 683 lux.
 const LUMENS_PER_WATT: f32 = 683.0;
@@ -259,12 +259,12 @@ fn world_area(local: &[[Vec3; 3]], rig: &Rig, node: usize) -> f32 {
     area.max(f32::MIN_POSITIVE)
 }
 
-/// The factor on a light's colour from the node's extras: a black body's colour at its colour
-/// temperature (luminance 1), or 1.
-fn light_tint(extras: &NodeExtras, name: &str) -> Result<Vec3, String> {
+/// The colour temperature of a light from the node's extras (its light is then a black body's
+/// spectrum, [`Illuminant::blackbody`]), or `None` (white is D65).
+fn light_temperature(extras: &NodeExtras, name: &str) -> Result<Option<f32>, String> {
     match extras.temperature_k {
-        None => Ok(Vec3::ONE),
-        Some(t) if t.is_finite() && t >= 100.0 => Ok(blackbody_colour(t)),
+        None => Ok(None),
+        Some(t) if t.is_finite() && t >= 100.0 => Ok(Some(t)),
         Some(t) => Err(format!(
             "node '{name}' extras `caustic.temperature_k`: expected a temperature of 100 K or more, got {t}"
         )),
@@ -325,7 +325,7 @@ impl Builder<'_> {
         } else if extras.panorama.is_some() {
             self.add_camera(None, node.index(), name, &extras)?;
         }
-        let tint = light_tint(&extras, name)?;
+        let kelvin = light_temperature(&extras, name)?;
         if let Some(blend) = extras.spot_blend.filter(|b| !(0.0..=1.0).contains(b)) {
             return Err(format!("node '{name}' extras `caustic.spot_blend`: expected a blend from 0 to 1, got {blend}"));
         }
@@ -337,20 +337,20 @@ impl Builder<'_> {
                     ));
                 }
                 (Kind::Point, Some(radius)) if radius > 0.0 => {
-                    let intensity = Vec3::from(light.color()) * tint * light.intensity() / LUMENS_PER_WATT;
-                    self.add_sphere_light(intensity, radius, node.index(), name, rig);
+                    let intensity = Vec3::from(light.color()) * light.intensity() / LUMENS_PER_WATT;
+                    self.add_sphere_light(intensity, kelvin, radius, node.index(), name, rig);
                 }
                 (_, Some(radius)) if radius > 0.0 => {
                     self.warnings.push(format!(
                         "node '{name}': a radius is rendered for point lights only; this light renders as a point"
                     ));
-                    self.add_punctual_light(&light, node.index(), &extras, tint);
+                    self.add_punctual_light(&light, node.index(), &extras, kelvin);
                 }
-                _ => self.add_punctual_light(&light, node.index(), &extras, tint),
+                _ => self.add_punctual_light(&light, node.index(), &extras, kelvin),
             }
         }
         if let Some(area) = &extras.area_light {
-            self.add_area_light(area, node.index(), name, rig, tint)?;
+            self.add_area_light(area, node.index(), name, rig, kelvin)?;
         }
         for child in node.children() {
             self.visit(&child, rig)?;
@@ -424,16 +424,16 @@ impl Builder<'_> {
         Ok(())
     }
 
-    /// A `KHR_lights_punctual` light, its colour multiplied by `tint`.
+    /// A `KHR_lights_punctual` light, a black body's of `kelvin` if given.
     fn add_punctual_light(
         &mut self,
         light: &gltf::khr_lights_punctual::Light,
         node: usize,
         extras: &NodeExtras,
-        tint: Vec3,
+        kelvin: Option<f32>,
     ) {
-        let colour = Vec3::from(light.color()) * tint * light.intensity() / LUMENS_PER_WATT;
-        let spectrum = RgbSpectrum::illuminant(colour);
+        let colour = Vec3::from(light.color()) * light.intensity() / LUMENS_PER_WATT;
+        let spectrum = Illuminant::new(colour, kelvin);
         let kind = match light.kind() {
             Kind::Point => PunctualKind::Point(spectrum),
             Kind::Spot { inner_cone_angle, outer_cone_angle } => {
@@ -457,14 +457,15 @@ impl Builder<'_> {
         node: usize,
         name: &str,
         rig: &Rig,
-        tint: Vec3,
+        kelvin: Option<f32>,
     ) -> Result<(), String> {
         if !(area.size > 0.0 && area.power >= 0.0 && area.size.is_finite() && area.power.is_finite()) {
             return Err(format!("node '{name}' area light: size must be positive and power non-negative"));
         }
         let local = shapes::area_light_triangles(area);
         let area_m2 = world_area(&local, rig, node);
-        let radiance = Vec3::from(area.color) * tint * area.power / (std::f32::consts::PI * area_m2);
+        let colour = Vec3::from(area.color) * area.power / (std::f32::consts::PI * area_m2);
+        let radiance = Illuminant::new(colour, kelvin);
         let normals = vec![-Vec3::Z; 3 * local.len()];
         self.add_light_mesh(node, format!("area light '{name}'"), &local, normals, radiance);
         Ok(())
@@ -474,10 +475,18 @@ impl Builder<'_> {
     /// renders it: radiance `4 I / A` from its outer faces of area A, so that it emits the power
     /// `4 pi I` of the point light of intensity I (W/sr) it replaces, passed through like an area
     /// light.
-    fn add_sphere_light(&mut self, intensity: Vec3, radius: f32, node: usize, name: &str, rig: &Rig) {
+    fn add_sphere_light(
+        &mut self,
+        intensity: Vec3,
+        kelvin: Option<f32>,
+        radius: f32,
+        node: usize,
+        name: &str,
+        rig: &Rig,
+    ) {
         let local = shapes::sphere_triangles(radius);
         let area_m2 = world_area(&local, rig, node);
-        let radiance = intensity * 4.0 / area_m2;
+        let radiance = Illuminant::new(intensity * 4.0 / area_m2, kelvin);
         let normals = local.iter().flatten().map(|p| p.normalize_or_zero()).collect();
         self.add_light_mesh(node, format!("sphere light '{name}'"), &local, normals, radiance);
     }
@@ -491,13 +500,13 @@ impl Builder<'_> {
         name: String,
         local: &[[Vec3; 3]],
         normals: Vec<Vec3>,
-        radiance: Vec3,
+        radiance: Illuminant,
     ) {
         let material = self.materials.len() as u32;
         self.materials.push(Material {
             name: name.clone(),
             base_colour: BaseColour::Constant(RgbSpectrum::constant(0.0)),
-            emission: Some(RgbSpectrum::illuminant(radiance)),
+            emission: Some(radiance),
             emits_both_sides: false,
             transmission: 1.0,
             ior: Dispersion::Constant(1.0),

@@ -13,7 +13,7 @@ use gltf::material::AlphaMode;
 use crate::materials::{
     Alpha, BaseColour, Clearcoat, Coverage, Material, NormalMap, Sheen, Specular, Volume,
 };
-use crate::spectrum::{Dispersion, RgbSpectrum};
+use crate::spectrum::{Dispersion, Illuminant, RgbSpectrum};
 use crate::texture::{DataTexture, Rgba, Texture, TextureMap};
 
 /// A glTF material as a Caustic material.
@@ -91,7 +91,7 @@ pub fn material(
         roughness: pbr.roughness_factor().clamp(0.0, 1.0),
         transmission: m.transmission().map_or(0.0, |t| t.transmission_factor()).clamp(0.0, 1.0),
         emission_texture,
-        emission: (emission.max_element() > 0.0).then(|| RgbSpectrum::illuminant(emission)),
+        emission: (emission.max_element() > 0.0).then(|| Illuminant::d65(emission)),
         emits_both_sides: true,
         thin: false,
         holdout: false,

@@ -12,7 +12,7 @@ pub mod rgb;
 pub mod tables;
 pub mod wavelength;
 
-pub use blackbody::blackbody_colour;
+pub use blackbody::{blackbody_colour, Illuminant};
 pub use dispersion::Dispersion;
 pub use rgb::{RgbSpectrum, Rows, SpectrumImage};
 pub use tables::{

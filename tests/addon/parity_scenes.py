@@ -329,18 +329,24 @@ def glass():
             "Tinted light": floor_disc((1.0, -0.3), 0.3)}
 
 
+def matte_floor_and_ball(radius, location, segments=64):
+    """A matte white floor and a matte grey ball (no specular layer) under a nearly black world,
+    for scenes about a light."""
+    add(bpy.ops.mesh.primitive_plane_add, principled("Floor", Base_Color=(0.8, 0.8, 0.8, 1.0), Roughness=1.0,
+                                                     Specular_IOR_Level=0.0), index=1, size=20)
+    add(bpy.ops.mesh.primitive_uv_sphere_add, principled("Grey", Base_Color=(0.5, 0.5, 0.5, 1.0), Roughness=1.0,
+                                                         Specular_IOR_Level=0.0),
+        index=2, segments=segments, ring_count=segments // 2, radius=radius, location=location)
+    bpy.ops.object.shade_smooth()
+    world((0.01, 0.01, 0.01))
+
+
 def warm_light():
     """A grey sphere on the floor under a point light of colour temperature 3000 K (Blender's
     Temperature, which Blender's glTF exporter cannot write) and a cool blue-tinted fill light
     of 12000 K."""
     clear()
-    add(bpy.ops.mesh.primitive_plane_add, principled("Floor", Base_Color=(0.8, 0.8, 0.8, 1.0), Roughness=1.0,
-                                                     Specular_IOR_Level=0.0), index=1, size=20)
-    add(bpy.ops.mesh.primitive_uv_sphere_add, principled("Grey", Base_Color=(0.5, 0.5, 0.5, 1.0), Roughness=1.0,
-                                                         Specular_IOR_Level=0.0),
-        index=2, segments=64, ring_count=32, radius=0.8, location=(0.0, 0.0, 0.8))
-    bpy.ops.object.shade_smooth()
-    world((0.01, 0.01, 0.01))
+    matte_floor_and_ball(0.8, (0.0, 0.0, 0.8))
     for location, kelvin, power in (((1.5, -1.5, 3.0), 3000.0, 800.0), ((-2.5, -1.0, 2.0), 12000.0, 200.0)):
         light = add(bpy.ops.object.light_add, type='POINT', location=location)
         light.data.energy, light.data.shadow_soft_size = power, 0.0
@@ -521,22 +527,11 @@ def film_and_holdouts():
     return {"Floor": 1, "Grey": 2}
 
 
-# Scenes whose alpha (a transparent film, holdouts) must match Cycles': a mean absolute difference
-# under 0.02 over the image and no pixel's over 0.25 (noise is under 0.1 at these sample counts;
-# an object that should not render shows).
-ALPHA = {"film_and_holdouts"}
-
 def spot_light():
     """A spot light of 70 degrees with Blender's Spot Blend 0.6 above a floor and a ball: the
     pool of light and its soft edge."""
     clear()
-    add(bpy.ops.mesh.primitive_plane_add, principled("Floor", Base_Color=(0.8, 0.8, 0.8, 1.0), Roughness=1.0,
-                                                     Specular_IOR_Level=0.0), index=1, size=20)
-    add(bpy.ops.mesh.primitive_uv_sphere_add, principled("Grey", Base_Color=(0.5, 0.5, 0.5, 1.0), Roughness=1.0,
-                                                         Specular_IOR_Level=0.0),
-        index=2, segments=48, ring_count=24, radius=0.5, location=(0.8, 0.3, 0.5))
-    bpy.ops.object.shade_smooth()
-    world((0.01, 0.01, 0.01))
+    matte_floor_and_ball(0.5, (0.8, 0.3, 0.5), segments=48)
     spot = add(bpy.ops.object.light_add, type='SPOT', location=(0.0, 0.0, 3.0))
     spot.data.energy, spot.data.shadow_soft_size = 1000.0, 0.0
     spot.data.spot_size, spot.data.spot_blend = math.radians(70), 0.6
@@ -573,6 +568,11 @@ def sky():
     camera((0.0, -7.0, 2.0), (0.0, 0.0, 1.0))
     return {"Floor": 1, "Grey": 2, "White": 3, "Sky": 0}
 
+
+# Scenes whose alpha (a transparent film, holdouts) must match Cycles': a mean absolute difference
+# under 0.02 over the image and no pixel's over 0.25 (noise is under 0.1 at these sample counts;
+# an object that should not render shows).
+ALPHA = {"film_and_holdouts"}
 
 # Scenes whose dark silhouettes (pixels under half the world's brightness) must match Cycles' within a pixel.
 SILHOUETTES = {"ortho_camera", "shifted_camera", "panorama_camera"}
