@@ -503,7 +503,8 @@ fn render_block(
     let (mut active, mut own_poses) = (Vec::new(), Vec::new());
     for &frame in frames {
         let film = Film::new(s.width, s.height, mode, settings.spectral_bins, settings.denoising_passes);
-        let monitor = Monitor::new(&settings.errors, frame, s.width, s.height, settings.alpha)?;
+        let shown = settings.progress != ProgressStyle::None;
+        let monitor = Monitor::new(&settings.errors, frame, [s.width, s.height], settings.alpha, shown)?;
         active.push(FrameInProgress { frame, film, monitor, stats: PassStats::default(), elapsed_s: 0.0 });
         // Without a shutter every pass of a frame sees the same instant: pose it once.
         own_poses.push((shot.still.is_none() && shot.shutter.length == 0.0).then(|| {

@@ -179,9 +179,15 @@ pub struct Monitor {
 }
 
 impl Monitor {
-    /// A monitor for `frame` of a `width` x `height` film rendered with radius reduction `alpha`;
-    /// checks the reference's size.
-    pub fn new(settings: &ErrorSettings, frame: i32, width: u32, height: u32, alpha: f64) -> Result<Self, String> {
+    /// A monitor for `frame` of a `width` x `height` film rendered with radius reduction `alpha`,
+    /// measuring the error for the progress display too if `shown`; checks the reference's size.
+    pub fn new(
+        settings: &ErrorSettings,
+        frame: i32,
+        [width, height]: [u32; 2],
+        alpha: f64,
+        shown: bool,
+    ) -> Result<Self, String> {
         let reference = match &settings.reference {
             Some(pattern) => {
                 let path = PathBuf::from(pattern.to_string_lossy().replace("####", &format!("{frame:04}")));
@@ -212,7 +218,7 @@ impl Monitor {
             reference,
             log,
             next_log_pass: 1,
-            next_status_pass: 1,
+            next_status_pass: if shown { 1 } else { u64::MAX },
             history: ErrorHistory::default(),
             slopes: [-0.5, -(alpha / 2.0).min(1.0 - alpha)],
             status: None,
