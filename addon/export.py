@@ -75,22 +75,30 @@ def world_plan(world):
         return WorldPlan(background=surface)
     if colour.type != 'TEX_ENVIRONMENT' or colour.projection != 'EQUIRECTANGULAR' or colour.image is None:
         return WorldPlan(bake=True)
-    mapping = linked_node(colour.inputs["Vector"])
+    mapping = None if generated(colour.inputs["Vector"]) else linked_node(colour.inputs["Vector"])
     if mapping is not None and not turns_about_z(mapping):
         return WorldPlan(bake=True)
     return WorldPlan(background=surface, environment=colour, mapping=mapping)
 
 
+def generated(socket):
+    """Whether a vector input takes the world's own directions: unlinked, or linked straight to
+    a Texture Coordinate node's Generated output."""
+    if not socket.is_linked:
+        return True
+    link = socket.links[0]
+    return link.from_node.type == 'TEX_COORD' and link.from_socket.name == "Generated"
+
+
 def turns_about_z(mapping):
-    """Whether a node is a Mapping node that only turns directions about Z (fed by texture
-    coordinates or nothing else)."""
+    """Whether a node is a Mapping node that only turns the world's directions about Z (fed by a
+    Texture Coordinate node's Generated output; unlinked, it looks up one direction)."""
     if mapping.type != 'MAPPING':
         return False
     inputs = mapping.inputs
     if any(socket.is_linked for socket in inputs if socket.name != "Vector"):
         return False
-    source = linked_node(inputs["Vector"])
-    if source is not None and source.type != 'TEX_COORD':
+    if not (inputs["Vector"].is_linked and generated(inputs["Vector"])):
         return False
     rotation = inputs["Rotation"].default_value
     moved = mapping.vector_type in ('POINT', 'TEXTURE') and any(abs(c) > 1e-6 for c in inputs["Location"].default_value)
