@@ -142,7 +142,8 @@ impl Camera {
                 let lat = latitude[1] + (latitude[0] - latitude[1]) * film.y;
                 let (sin_lon, cos_lon) = lon.sin_cos();
                 let (sin_lat, cos_lat) = lat.sin_cos();
-                let local = self.forward * (cos_lat * cos_lon) + self.right * (cos_lat * sin_lon) + self.up * sin_lat;
+                let local =
+                    self.forward * (cos_lat * cos_lon) + self.right * (cos_lat * sin_lon) + self.up * sin_lat;
                 (self.position, local.normalize())
             }
         }
@@ -197,9 +198,11 @@ mod tests {
     fn project_inverts_ray_for_every_projection() {
         let world = Mat4::from_rotation_y(0.3) * Mat4::from_translation(Vec3::new(1.0, 2.0, 3.0));
         let panorama = Projection::Equirectangular { longitude: [-3.0, 3.0], latitude: [-1.5, 1.2] };
-        for projection in
-            [Projection::Perspective { tan_half_fov_y: 0.4 }, Projection::Orthographic { half_height: 2.0 }, panorama]
-        {
+        for projection in [
+            Projection::Perspective { tan_half_fov_y: 0.4 },
+            Projection::Orthographic { half_height: 2.0 },
+            panorama,
+        ] {
             let camera = Camera::from_node(world, projection, Vec2::new(0.1, -0.05));
             let film = Vec2::new(0.2, 0.7);
             let (origin, direction) = camera.ray(film, 1.5);
@@ -211,7 +214,11 @@ mod tests {
     #[test]
     fn a_shift_of_half_the_film_height_moves_the_centre_to_the_top_edge() {
         let tan = 0.4;
-        let camera = Camera::from_node(Mat4::IDENTITY, Projection::Perspective { tan_half_fov_y: tan }, Vec2::new(0.0, 0.5));
+        let camera = Camera::from_node(
+            Mat4::IDENTITY,
+            Projection::Perspective { tan_half_fov_y: tan },
+            Vec2::new(0.0, 0.5),
+        );
         let (_, direction) = camera.ray(Vec2::new(0.5, 0.5), 2.0);
         assert!((direction - Vec3::new(0.0, tan, -1.0).normalize()).length() < 1e-6, "{direction}");
     }

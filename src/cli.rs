@@ -297,9 +297,11 @@ fn unit_interval(s: &str) -> Result<f64, String> {
 }
 
 fn parse_crop(s: &str) -> Result<[u32; 4], String> {
-    let numbers: Vec<u32> = s.split(',').map(|n| n.trim().parse::<u32>()).collect::<Result<_, _>>().map_err(|_| {
-        format!("expected X,Y,W,H in whole pixels (such as 10,20,64,48), got '{s}'")
-    })?;
+    let numbers: Vec<u32> = s
+        .split(',')
+        .map(|n| n.trim().parse::<u32>())
+        .collect::<Result<_, _>>()
+        .map_err(|_| format!("expected X,Y,W,H in whole pixels (such as 10,20,64,48), got '{s}'"))?;
     match numbers[..] {
         [x, y, w, h] if w > 0 && h > 0 => Ok([x, y, w, h]),
         _ => Err(format!("expected X,Y,W,H with a width and height of 1 or more, got '{s}'")),

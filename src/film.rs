@@ -241,7 +241,8 @@ impl Film {
         let bands = (self.bins.count > 0).then(|| lambda.nm.to_array().map(|l| self.bins.band(l)));
         let band_weights =
             lambda.pdf.to_array().map(|p| 1.0 / (f64::from(p) * self.bins.width_nm() * LANES as f64));
-        for (i, (sums, (radiance, laplacian, coverage))) in self.pixels.iter_mut().zip(estimates).enumerate() {
+        for (i, (sums, (radiance, laplacian, coverage))) in self.pixels.iter_mut().zip(estimates).enumerate()
+        {
             // A non-finite estimate would poison the pixel's sums for good: count it as zero and
             // report it, so the image stays usable and the problem is not silent.
             let (radiance, laplacian) = if radiance.is_finite() && laplacian.is_finite() {
@@ -281,7 +282,11 @@ impl Film {
     /// Adds one pass's denoising guides (each pixel's albedo at the wavelengths `lambda` and its
     /// normal), after [`Film::add_pass`] added the pass (whose count they share); nothing when the
     /// film keeps no guides.
-    pub fn add_guides(&mut self, lambda: &Wavelengths, guides: impl Iterator<Item = (SampledSpectrum, glam::Vec3)>) {
+    pub fn add_guides(
+        &mut self,
+        lambda: &Wavelengths,
+        guides: impl Iterator<Item = (SampledSpectrum, glam::Vec3)>,
+    ) {
         let weights = self.lane_weights(lambda);
         for (sums, (albedo, normal)) in self.guides.chunks_exact_mut(GUIDE_SUMS).zip(guides) {
             let xyz = lanes_xyz(&weights, albedo * lambda.d65);
@@ -308,9 +313,19 @@ impl Film {
                 [rgb.x, rgb.y, rgb.z, s[3] / passes, s[4] / passes, s[5] / passes]
             })
             .collect();
-        let names = ["Denoising Albedo.R", "Denoising Albedo.G", "Denoising Albedo.B", "Denoising Normal.X",
-            "Denoising Normal.Y", "Denoising Normal.Z"];
-        names.iter().enumerate().map(|(k, name)| (*name, pixels.iter().map(|p| p[k] as f32).collect())).collect()
+        let names = [
+            "Denoising Albedo.R",
+            "Denoising Albedo.G",
+            "Denoising Albedo.B",
+            "Denoising Normal.X",
+            "Denoising Normal.Y",
+            "Denoising Normal.Z",
+        ];
+        names
+            .iter()
+            .enumerate()
+            .map(|(k, name)| (*name, pixels.iter().map(|p| p[k] as f32).collect()))
+            .collect()
     }
 
     /// The per-channel XYZ scale that makes the passes' white estimate exact.
@@ -346,7 +361,10 @@ impl Film {
 
     /// The mean coverage (alpha) of every pixel (1 before any pass).
     pub fn alpha(&self) -> Vec<f32> {
-        self.pixels.iter().map(|s| if s.passes == 0 { 1.0 } else { (s.coverage / s.passes as f64) as f32 }).collect()
+        self.pixels
+            .iter()
+            .map(|s| if s.passes == 0 { 1.0 } else { (s.coverage / s.passes as f64) as f32 })
+            .collect()
     }
 
     /// Writes the image, with `extra` channels (name, one value per pixel), to `path` through a
@@ -390,8 +408,11 @@ mod tests {
         let mut film = Film::new(2, 1, FilmMode::Spectral, 0, false);
         for i in 0..passes {
             let lambda = Wavelengths::sampled(pass_sample(5, i));
-            let pixel =
-                (SampledSpectrum::from_array(lambda.nm.to_array().map(&radiance)), SampledSpectrum::ZERO, 1.0);
+            let pixel = (
+                SampledSpectrum::from_array(lambda.nm.to_array().map(&radiance)),
+                SampledSpectrum::ZERO,
+                1.0,
+            );
             film.add_pass(&lambda, 0.1, [pixel, pixel].into_iter());
         }
         film
@@ -433,7 +454,11 @@ mod tests {
         let mut film = Film::new(1, 1, FilmMode::Spectral, 47, false);
         for i in 0..10_000 {
             let lambda = Wavelengths::sampled(pass_sample(9, i));
-            film.add_pass(&lambda, 0.1, [(SampledSpectrum::splat(2.0), SampledSpectrum::ZERO, 1.0)].into_iter());
+            film.add_pass(
+                &lambda,
+                0.1,
+                [(SampledSpectrum::splat(2.0), SampledSpectrum::ZERO, 1.0)].into_iter(),
+            );
         }
         let bands: Vec<f64> = film.bins.sums.iter().map(|s| s / film.passes as f64).collect();
         // A flat spectrum of 2 per nm: every 10 nm band averages 2.

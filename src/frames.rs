@@ -239,7 +239,8 @@ const MAX_IMAGE_BYTES: u64 = 16 << 30;
 /// The window of the image a render covers: `--crop`, which must lie inside the image, or the whole.
 fn crop(window: Option<[u32; 4]>, image: [u32; 2]) -> Result<Crop, String> {
     let Some([x, y, w, h]) = window else { return Ok(Crop::whole(image)) };
-    if u64::from(x) + u64::from(w) > u64::from(image[0]) || u64::from(y) + u64::from(h) > u64::from(image[1]) {
+    if u64::from(x) + u64::from(w) > u64::from(image[0]) || u64::from(y) + u64::from(h) > u64::from(image[1])
+    {
         return Err(format!(
             "--crop {x},{y},{w},{h} reaches beyond the {}x{} image (x + width and y + height must fit)",
             image[0], image[1]

@@ -23,7 +23,8 @@ fn json_line(line: serde_json::Value) {
 
 /// The error and the forecast for the bar: "error 3.4%", "error 3.4% (2% in about 12 s)".
 fn describe(status: ErrorStatus) -> String {
-    let percent = |e: f64| format!("{}%", format!("{:.2}", e * 100.0).trim_end_matches('0').trim_end_matches('.'));
+    let percent =
+        |e: f64| format!("{}%", format!("{:.2}", e * 100.0).trim_end_matches('0').trim_end_matches('.'));
     let error = format!("error {}", percent(status.error));
     match (status.target, status.seconds_left) {
         (Some(target), Some(left)) => format!("{error} ({} in about {left:.0} s)", percent(target)),

@@ -12,7 +12,12 @@ use std::path::Path;
 /// A white ground (albedo 0.5) under a uniform world of radiance 1 and a small sphere of
 /// `sphere` material over it (its node's `caustic` extras `node_extras`), seen from the side so
 /// that the top rows see the sky; rendered at 32 x 32 with `scene_extras` added.
-fn ground_and_sphere(dir: &Path, sphere: Value, node_extras: Value, scene_extras: Value) -> (Image, Vec<f32>) {
+fn ground_and_sphere(
+    dir: &Path,
+    sphere: Value,
+    node_extras: Value,
+    scene_extras: Value,
+) -> (Image, Vec<f32>) {
     let mut gltf = GltfBuilder::default();
     let ground = gltf.material(diffuse([0.5, 0.5, 0.5]));
     gltf.quad_y("Ground", 0.0, 20.0, true, ground);
@@ -54,8 +59,12 @@ fn a_transparent_film_hides_the_world_it_is_lit_by() {
     assert_eq!(mean_alpha(&alpha, 0, 32, SKY.0, SKY.1), 0.0);
     assert_eq!(image.luminance(0, 32, SKY.0, SKY.1), 0.0, "the sky is not seen");
     assert_eq!(mean_alpha(&alpha, 0, 32, GROUND.0, GROUND.1), 1.0);
-    let (lit, reference) = (image.luminance(0, 32, GROUND.0, GROUND.1), opaque.luminance(0, 32, GROUND.0, GROUND.1));
-    assert!((lit / reference - 1.0).abs() < 0.03, "the world still lights the ground: {lit} against {reference}");
+    let (lit, reference) =
+        (image.luminance(0, 32, GROUND.0, GROUND.1), opaque.luminance(0, 32, GROUND.0, GROUND.1));
+    assert!(
+        (lit / reference - 1.0).abs() < 0.03,
+        "the world still lights the ground: {lit} against {reference}"
+    );
 }
 
 #[test]
@@ -64,7 +73,9 @@ fn a_holdout_is_a_black_hole_in_the_film_that_still_casts_its_shadow() {
     let (plain, _) = ground_and_sphere(dir.path(), diffuse([0.8, 0.8, 0.8]), Value::Null, json!({}));
     let shader = json!({"pbrMetallicRoughness": {"baseColorFactor": [0.8, 0.8, 0.8, 1.0]}, "extras": {"caustic": {"holdout": true}}});
     let object = (diffuse([0.8, 0.8, 0.8]), json!({"holdout": true}));
-    for (what, sphere, node) in [("Holdout shader", shader, Value::Null), ("holdout object", object.0, object.1)] {
+    for (what, sphere, node) in
+        [("Holdout shader", shader, Value::Null), ("holdout object", object.0, object.1)]
+    {
         let (image, alpha) = ground_and_sphere(dir.path(), sphere, node, json!({}));
         let (x0, x1, y0, y1) = BALL;
         assert_eq!(mean_alpha(&alpha, x0, x1, y0, y1), 0.0, "{what}: the sphere is a hole");
@@ -89,11 +100,22 @@ fn a_crop_is_the_same_pixels_as_the_whole_image() {
         ..settings(&scene, &dir.path().join("whole"), 4)
     };
     let whole = render(&whole_settings, 2);
-    let crop = render(&RenderSettings { crop: Some([10, 5, 20, 12]), out_dir: dir.path().join("crop"), ..whole_settings.clone() }, 1);
+    let crop = render(
+        &RenderSettings {
+            crop: Some([10, 5, 20, 12]),
+            out_dir: dir.path().join("crop"),
+            ..whole_settings.clone()
+        },
+        1,
+    );
     assert_eq!((crop.width, crop.height), (20, 12));
     for y in 0..12 {
         for x in 0..20 {
-            assert_eq!(crop.rgb[y * 20 + x], whole.rgb[(y + 5) * 48 + x + 10], "pixel ({x}, {y}) of the crop");
+            assert_eq!(
+                crop.rgb[y * 20 + x],
+                whole.rgb[(y + 5) * 48 + x + 10],
+                "pixel ({x}, {y}) of the crop"
+            );
         }
     }
     let beyond = RenderSettings { crop: Some([40, 0, 10, 10]), ..whole_settings };
@@ -115,12 +137,15 @@ fn denoising_passes_hold_the_albedo_and_normal_the_camera_sees() {
     gltf.scene_extras(json!({"resolution": [16, 16], "world": {"color": [1.0, 1.0, 1.0]}}));
     let path = gltf.write(dir.path(), "ground");
     let plain = frames::render(&settings(&path, &dir.path().join("plain"), 64)).unwrap();
-    let guided_settings = RenderSettings { denoising_passes: true, ..settings(&path, &dir.path().join("guided"), 64) };
+    let guided_settings =
+        RenderSettings { denoising_passes: true, ..settings(&path, &dir.path().join("guided"), 64) };
     let guided = frames::render(&guided_settings).unwrap();
     let (plain, guided_image) = (read_exr(&plain.frames[0].path), read_exr(&guided.frames[0].path));
     assert_eq!(plain.rgb, guided_image.rgb, "the guides change nothing in the image");
     let channels = exr_channels(&guided.frames[0].path);
-    let channel = |name: &str| channels.iter().find(|(n, _)| n == name).unwrap_or_else(|| panic!("no {name}")).1.clone();
+    let channel = |name: &str| {
+        channels.iter().find(|(n, _)| n == name).unwrap_or_else(|| panic!("no {name}")).1.clone()
+    };
     let mean = |values: &[f32]| values.iter().map(|&v| f64::from(v)).sum::<f64>() / values.len() as f64;
     for (c, expected) in [("R", 0.5), ("G", 0.25), ("B", 0.125)] {
         let albedo = mean(&channel(&format!("Denoising Albedo.{c}")));

@@ -158,7 +158,8 @@ fn camera_seed() -> Value {
     gltf.sphere("Ball", [0.0, 0.0, -3.0], 0.5, 12, grey);
     gltf.sphere("Hole", [1.0, 0.0, -3.0], 0.3, 8, grey);
     gltf.set_node_extras(gltf.last_node(), json!({"holdout": true}));
-    let spot = json!({"type": "spot", "intensity": 500.0, "spot": {"innerConeAngle": 0.2, "outerConeAngle": 0.5}});
+    let spot =
+        json!({"type": "spot", "intensity": 500.0, "spot": {"innerConeAngle": 0.2, "outerConeAngle": 0.5}});
     gltf.light(spot, [0.0, 2.0, -3.0], [0.0, -1.0, 0.0]);
     gltf.set_node_extras(gltf.last_node(), json!({"spot_blend": 0.4}));
     let ortho = json!({"type": "orthographic", "orthographic": {"xmag": 2.0, "ymag": 1.5, "znear": 0.01, "zfar": 50.0}});
@@ -168,7 +169,9 @@ fn camera_seed() -> Value {
     gltf.set_node_extras(gltf.last_node(), json!({"shift": [0.1, -0.2], "lens": lens}));
     let panorama = json!({"panorama": {"longitude_deg": [-120.0, 90.0], "latitude_deg": [-45.0, 60.0]}});
     gltf.extras_node("Panorama", panorama, [0.0, 0.0, 0.0], [0.0, 0.0, -1.0]);
-    gltf.scene_extras(json!({"camera": "Panorama", "world": {"color": [1.0, 1.0, 1.0]}, "transparent_film": true}));
+    gltf.scene_extras(
+        json!({"camera": "Panorama", "world": {"color": [1.0, 1.0, 1.0]}, "transparent_film": true}),
+    );
     gltf.to_json()
 }
 
@@ -267,8 +270,11 @@ proptest! {
 #[test]
 fn the_built_seeds_render() {
     let dir = tempfile::tempdir().unwrap();
-    let seeds = [("textured", textured_seed(), 0, "'Pane'"), ("volumes", volume_seed(), 1, "'Pane'"),
-        ("cameras", camera_seed(), 0, "")];
+    let seeds = [
+        ("textured", textured_seed(), 0, "'Pane'"),
+        ("volumes", volume_seed(), 1, "'Pane'"),
+        ("cameras", camera_seed(), 0, ""),
+    ];
     for (name, seed, expected, named) in seeds {
         let path = dir.path().join(format!("{name}.gltf"));
         std::fs::write(&path, seed.to_string()).unwrap();

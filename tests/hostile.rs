@@ -355,12 +355,17 @@ fn an_impossible_colour_temperature_is_refused() {
 #[test]
 fn impossible_cameras_are_refused() {
     let dir = tempfile::tempdir().unwrap();
-    let camera_node = |doc: &Value| doc["nodes"].as_array().unwrap().iter().position(|n| n.get("camera").is_some()).unwrap();
+    let camera_node = |doc: &Value| {
+        doc["nodes"].as_array().unwrap().iter().position(|n| n.get("camera").is_some()).unwrap()
+    };
     let ortho = furnace_edited(dir.path(), "ortho.gltf", |doc| {
         doc["cameras"][0] = json!({"type": "orthographic", "orthographic": {"xmag": 1.0, "ymag": 0.0, "znear": 0.1, "zfar": 10.0}});
     });
     assert_refused(&ortho, &["orthographic camera needs positive xmag and ymag"]);
-    for (i, panorama) in [json!({"latitude_deg": [10.0, -10.0]}), json!({"longitude_deg": [-300.0, 300.0]})].into_iter().enumerate() {
+    for (i, panorama) in [json!({"latitude_deg": [10.0, -10.0]}), json!({"longitude_deg": [-300.0, 300.0]})]
+        .into_iter()
+        .enumerate()
+    {
         let path = furnace_edited(dir.path(), &format!("panorama{i}.gltf"), |doc| {
             let node = camera_node(doc);
             doc["nodes"][node]["extras"] = json!({"caustic": {"panorama": panorama}});
@@ -370,7 +375,10 @@ fn impossible_cameras_are_refused() {
     let spot = furnace_edited(dir.path(), "spot.gltf", |doc| {
         doc["nodes"][0]["extras"] = json!({"caustic": {"spot_blend": 1.5}});
     });
-    assert_refused(&spot, &["node 'Enclosure'", "`caustic.spot_blend`: expected a blend from 0 to 1, got 1.5"]);
+    assert_refused(
+        &spot,
+        &["node 'Enclosure'", "`caustic.spot_blend`: expected a blend from 0 to 1, got 1.5"],
+    );
 }
 
 /// Hostile texture references and attributes render with a warning naming the material or mesh:

@@ -22,9 +22,7 @@ use super::animation::{Interpolation, NodeMotion, Rig, Track};
 use super::description::{
     CameraInstance, Description, LensSettings, MeshInstance, PunctualKind, PunctualLight, Shutter,
 };
-use super::extras::{
-    self, AreaLightExtras, NodeExtras, SceneExtras, ShutterExtras, ShutterPosition,
-};
+use super::extras::{self, AreaLightExtras, NodeExtras, SceneExtras, ShutterExtras, ShutterPosition};
 use super::gltf_materials::material;
 use super::{shapes, tangents, SceneError, TriangleRef, VertexExtras};
 use crate::camera::Projection;
@@ -327,7 +325,9 @@ impl Builder<'_> {
         }
         let kelvin = light_temperature(&extras, name)?;
         if let Some(blend) = extras.spot_blend.filter(|b| !(0.0..=1.0).contains(b)) {
-            return Err(format!("node '{name}' extras `caustic.spot_blend`: expected a blend from 0 to 1, got {blend}"));
+            return Err(format!(
+                "node '{name}' extras `caustic.spot_blend`: expected a blend from 0 to 1, got {blend}"
+            ));
         }
         if let Some(light) = node.light() {
             match (light.kind(), extras.radius) {
@@ -385,7 +385,8 @@ impl Builder<'_> {
         let (projection, aspect_ratio) = match (&extras.panorama, camera.map(|c| c.projection())) {
             (Some(panorama), _) => {
                 if lens.is_some_and(|l| l.fstop > 0.0) {
-                    self.warnings.push(format!("camera node '{name}': depth of field is not rendered on a panorama"));
+                    self.warnings
+                        .push(format!("camera node '{name}': depth of field is not rendered on a panorama"));
                 }
                 (panorama_projection(panorama, name)?, None)
             }
@@ -399,7 +400,9 @@ impl Builder<'_> {
         };
         let shift = extras.shift.map_or(Vec2::ZERO, Vec2::from);
         if !shift.is_finite() {
-            return Err(format!("camera node '{name}' extras `caustic.shift`: expected two numbers, got {shift}"));
+            return Err(format!(
+                "camera node '{name}' extras `caustic.shift`: expected two numbers, got {shift}"
+            ));
         }
         // Blender's sensor fit: a 36 mm sensor across the wider side of the image.
         let aspect = aspect_ratio.unwrap_or(1.0).max(1e-6);

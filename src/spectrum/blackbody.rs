@@ -75,7 +75,11 @@ impl Illuminant {
         }
         let kelvin = f64::from(self.kelvin);
         table_wavelengths()
-            .map(|l| f64::from(self.shape.eval(l) * cmf(l).y) * planck(f64::from(l), kelvin) * f64::from(self.scale))
+            .map(|l| {
+                f64::from(self.shape.eval(l) * cmf(l).y)
+                    * planck(f64::from(l), kelvin)
+                    * f64::from(self.scale)
+            })
             .sum()
     }
 }
@@ -125,10 +129,17 @@ mod tests {
         for kelvin in [2700.0, 4000.0, 9000.0] {
             let white = colour_of(&Illuminant::blackbody(Vec3::splat(2.0), kelvin));
             let expected = 2.0 * blackbody_colour(kelvin);
-            assert!((white - expected).abs().max_element() < 2e-3 * 2.0, "{kelvin} K: {white} against {expected}");
+            assert!(
+                (white - expected).abs().max_element() < 2e-3 * 2.0,
+                "{kelvin} K: {white} against {expected}"
+            );
         }
         let tinted = Illuminant::blackbody(Vec3::new(1.0, 0.5, 0.2), 3000.0);
         let expected = luminance_of(Vec3::new(1.0, 0.5, 0.2) * blackbody_colour(3000.0));
-        assert!((tinted.luminance() / expected - 1.0).abs() < 1e-4, "{} against {expected}", tinted.luminance());
+        assert!(
+            (tinted.luminance() / expected - 1.0).abs() < 1e-4,
+            "{} against {expected}",
+            tinted.luminance()
+        );
     }
 }

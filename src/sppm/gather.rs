@@ -181,7 +181,11 @@ impl PhotonSet {
     /// the point (looked up once for the sum).
     pub fn estimate(&self, eye: &EyeResult, mut sums: PhotonSums) -> PixelEstimate {
         let Some(vp) = eye.point else {
-            return PixelEstimate { radiance: eye.radiance, laplacian: SampledSpectrum::ZERO, coverage: eye.coverage };
+            return PixelEstimate {
+                radiance: eye.radiance,
+                laplacian: SampledSpectrum::ZERO,
+                coverage: eye.coverage,
+            };
         };
         if sums.kernel != SampledSpectrum::ZERO {
             let radius = self.kernel.r2.sqrt();

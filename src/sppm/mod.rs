@@ -19,5 +19,7 @@ mod visible;
 
 pub use guides::Guide;
 pub use photons::Photon;
-pub use renderer::{Crop, PassSamples, PassStats, PixelEstimate, Renderer, SppmSettings, VisiblePoint, MAX_DEPTH};
+pub use renderer::{
+    Crop, PassSamples, PassStats, PixelEstimate, Renderer, SppmSettings, VisiblePoint, MAX_DEPTH,
+};
 pub use shared::{run_shared_pass, SharedPassOutput};
