@@ -235,7 +235,6 @@ const BYTES_PER_PIXEL: u64 = 256;
 /// The largest image memory Caustic will try to allocate, in bytes.
 const MAX_IMAGE_BYTES: u64 = 16 << 30;
 
-/// Refuses resolutions whose buffers would not fit in memory, before anything is allocated.
 /// The window of the image a render covers: `--crop`, which must lie inside the image, or the whole.
 fn crop(window: Option<[u32; 4]>, image: [u32; 2]) -> Result<Crop, String> {
     let Some([x, y, w, h]) = window else { return Ok(Crop::whole(image)) };
@@ -249,6 +248,7 @@ fn crop(window: Option<[u32; 4]>, image: [u32; 2]) -> Result<Crop, String> {
     Ok(Crop { image, origin: [x, y], size: [w, h] })
 }
 
+/// Refuses resolutions whose buffers would not fit in memory, before anything is allocated.
 fn check_resolution([width, height]: [u32; 2]) -> Result<(), String> {
     let bytes = u64::from(width) * u64::from(height) * BYTES_PER_PIXEL;
     if bytes > MAX_IMAGE_BYTES {
