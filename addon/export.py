@@ -310,7 +310,7 @@ def node_extras(blender_object):
             extras["area_light"] = area_light_extras(light)
         if light.type == 'SUN':
             extras["sun_angle_deg"] = math.degrees(light.angle)
-        if light.type == 'POINT' and light.shadow_soft_size > 0:
+        if light.type in ('POINT', 'SPOT') and light.shadow_soft_size > 0:
             extras["radius"] = light.shadow_soft_size
         if light.type == 'SPOT':
             extras["spot_blend"] = light.spot_blend
@@ -528,8 +528,9 @@ def scene_warnings(depsgraph):
             warnings.append(f"light '{light.name}': an area light's Spread is not rendered; it spreads over 180 "
                             "degrees")
         if light.type == 'SPOT' and light.shadow_soft_size > 0:
-            warnings.append(f"light '{light.name}': a spot light's radius is not rendered; it renders as a point")
-        if light.type == 'POINT' and light.shadow_soft_size > 0 and getattr(light, "use_soft_falloff", False):
+            warnings.append(f"light '{light.name}': a spot light's sphere casts soft shadows but is not seen by the "
+                            "camera or in mirror-like reflections")
+        if light.type in ('POINT', 'SPOT') and light.shadow_soft_size > 0 and getattr(light, "use_soft_falloff", False):
             warnings.append(f"light '{light.name}': Soft Falloff is not rendered: the light is a sphere, which lights "
                             "surfaces within a few radii of it more than Blender's falloff does")
     return warnings

@@ -62,15 +62,39 @@ fn a_point_light_with_a_radius_is_a_sphere_of_the_same_power() {
     let expected = 4.0 / (0.3f64 * 0.3);
     let seen = mean_luminance(&path, dir.path());
     assert!((seen / expected - 1.0).abs() < 0.02, "the sphere's radiance: {seen} vs {expected}");
-    // A spot light's radius is not rendered, and says so.
-    let spot = json!({"type": "spot", "intensity": 683.0, "spot": {"outerConeAngle": 0.4}});
-    let mut doc = ground_scene(|g| g.light(spot, [0.0, 2.0, 0.0], [0.0, -1.0, 0.0])).to_json();
+    // A sun's radius is not rendered, and says so.
+    let sun = json!({"type": "directional", "intensity": 683.0});
+    let mut doc = ground_scene(|g| g.light(sun, [0.0, 2.0, 0.0], [0.0, -1.0, 0.0])).to_json();
     let nodes = doc["nodes"].as_array_mut().unwrap();
     nodes.iter_mut().find(|n| n.get("extensions").is_some()).unwrap()["extras"] =
         json!({"caustic": {"radius": 0.3}});
     std::fs::write(&path, doc.to_string()).unwrap();
     let warnings = caustic::scene::Description::load(&path).unwrap().warnings;
-    assert!(warnings.iter().any(|w| w.contains("radius is rendered for point lights only")), "{warnings:?}");
+    assert!(warnings.iter().any(|w| w.contains("radius is rendered for point and spot lights only")), "{warnings:?}");
+}
+
+/// A spot light with a radius (Blender's: a sphere of light inside the spot's cone) lights the
+/// ground under it as the spot's point does (a sphere wholly above a point lights it as its
+/// centre would), and casts a soft shadow: a small disc just under it shades the ground below
+/// it partly, where a point spot's shadow is whole.
+#[test]
+fn a_spot_light_with_a_radius_lights_as_its_point_and_softens_shadows() {
+    let dir = tempfile::tempdir().unwrap();
+    let render_spot = |radius: f32, blocker: bool| {
+        let spot = json!({"type": "spot", "intensity": 4.0 * PI * 683.0, "spot": {"innerConeAngle": 0.5, "outerConeAngle": 0.6}});
+        let mut gltf = ground_scene(|g| g.light(spot, [0.0, 2.0, 0.0], [0.0, -1.0, 0.0]));
+        gltf.set_node_extras(gltf.last_node(), json!({"radius": radius}));
+        if blocker {
+            let black = gltf.material(diffuse([0.0, 0.0, 0.0]));
+            gltf.mesh("Blocker", &[[[-0.05, 1.2, -0.05], [0.05, 1.2, 0.05], [0.05, 1.2, -0.05]],
+                [[-0.05, 1.2, -0.05], [-0.05, 1.2, 0.05], [0.05, 1.2, 0.05]]], black);
+        }
+        mean_luminance(&gltf.write(dir.path(), "spot_sphere"), dir.path())
+    };
+    assert_near(render_spot(0.3, false), 1.0, "under a spot sphere");
+    let (hard, soft) = (render_spot(0.0, true), render_spot(0.3, true));
+    assert!(hard < 0.02, "a point spot's shadow is whole: {hard}");
+    assert!(soft > 0.3 && soft < 0.95, "a spot sphere's shadow is partial: {soft}");
 }
 
 /// A spot light of the same intensity pointing down lights the ground under it the same, and

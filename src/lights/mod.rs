@@ -58,6 +58,8 @@ pub enum Light {
         falloff: SpotFalloff,
         /// The outer cone (no light outside).
         outer: Cone,
+        /// The radius of its sphere (Blender's spot radius: soft shadows), or 0 for a point.
+        radius: f32,
     },
     /// A distant light with an angular diameter (soft shadows) or none.
     Sun {
@@ -322,10 +324,19 @@ impl Light {
                 let radiance_over_pdf = spectral(intensity, lambda) / (distance * distance);
                 Some(LightSample { wi, distance, radiance_over_pdf, pdf: 0.0 })
             }
-            Light::Spot { position, axis, intensity, falloff, outer } => {
-                let (wi, distance) = direction_and_distance(p, *position)?;
+            Light::Spot { position, axis, intensity, falloff, outer, radius } => {
+                let (to_centre, centre_distance) = direction_and_distance(p, *position)?;
+                // A sphere of intensity I shows radiance I / (pi r^2): a sample carries that times
+                // the solid angle it was drawn over (I / d^2 for a point, or from inside), dimmed
+                // by the spot's falloff along the sample's own direction (so the sphere softens
+                // the pool's edge too, as in Cycles). Its pdf is left 0, as a point's: rays do not
+                // hit the sphere, so this term takes all the weight.
+                let (wi, distance, scale) = match sphere_sample(to_centre, centre_distance, *radius, u) {
+                    Some((wi, distance, solid_angle)) => (wi, distance, solid_angle / (PI * radius * radius)),
+                    None => (to_centre, centre_distance, 1.0 / (centre_distance * centre_distance)),
+                };
                 let falloff = spot_falloff(one_minus_cos_between(-wi, *axis), *falloff, *outer);
-                let radiance_over_pdf = spectral(intensity, lambda) * falloff / (distance * distance);
+                let radiance_over_pdf = spectral(intensity, lambda) * (falloff * scale);
                 (falloff > 0.0).then_some(LightSample { wi, distance, radiance_over_pdf, pdf: 0.0 })
             }
             Light::Sun { direction, irradiance, disc, .. } => {
@@ -402,14 +413,15 @@ impl Light {
                 direction: square_to_sphere(u_direction),
                 flux: spectral(intensity, lambda) * 4.0 * PI,
             },
-            Light::Spot { position, axis, intensity, falloff, outer } => {
+            Light::Spot { position, axis, intensity, falloff, outer, radius } => {
                 let (t, b) = basis(*axis);
                 let local = square_to_cone(u_direction, outer.one_minus_cos);
                 let falloff = spot_falloff(u_direction.x * outer.one_minus_cos, *falloff, *outer);
                 let solid_angle = outer.solid_angle();
+                let direction = (t * local.x + b * local.y + *axis * local.z).normalize();
                 EmittedPhoton {
-                    origin: *position,
-                    direction: (t * local.x + b * local.y + *axis * local.z).normalize(),
+                    origin: *position + sphere_point_facing(direction, *radius, u_position),
+                    direction,
                     flux: spectral(intensity, lambda) * falloff * solid_angle,
                 }
             }
@@ -461,6 +473,35 @@ impl Light {
 }
 
 /// Unit direction from `p` to `q` and their distance; `None` if they coincide.
+/// A direction from a point toward a sphere of `radius` whose centre lies `distance` along the
+/// unit `to_centre`, uniform over the solid angle the sphere covers: (direction, distance to the
+/// sphere along it, that solid angle); `None` for a point (radius 0) or from inside.
+fn sphere_sample(to_centre: Vec3, distance: f32, radius: f32, u: Vec2) -> Option<(Vec3, f32, f32)> {
+    if !(radius > 0.0 && distance > radius) {
+        return None;
+    }
+    let sin2_max = (radius / distance).powi(2);
+    let one_minus_cos_max = sin2_max / (1.0 + (1.0 - sin2_max).sqrt());
+    let local = square_to_cone(u, one_minus_cos_max);
+    let (t, b) = basis(to_centre);
+    let wi = (t * local.x + b * local.y + to_centre * local.z).normalize();
+    let along = distance * local.z;
+    let hit = along - (radius * radius - distance * distance * (1.0 - local.z * local.z)).max(0.0).sqrt();
+    Some((wi, hit, 2.0 * PI * one_minus_cos_max))
+}
+
+/// Where on a sphere of `radius` about its centre a photon leaving along `direction` starts: a
+/// uniform point of the disc the sphere shows that way, on its surface (the sphere emits the
+/// same intensity in every direction, from its projected disc).
+fn sphere_point_facing(direction: Vec3, radius: f32, u: Vec2) -> Vec3 {
+    if radius <= 0.0 {
+        return Vec3::ZERO;
+    }
+    let (t, b) = basis(direction);
+    let d = square_to_disc(u);
+    radius * (t * d.x + b * d.y + direction * (1.0 - d.length_squared()).max(0.0).sqrt())
+}
+
 fn direction_and_distance(p: Vec3, q: Vec3) -> Option<(Vec3, f32)> {
     let d = q - p;
     let distance = d.length();

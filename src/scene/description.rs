@@ -39,7 +39,7 @@ pub enum PunctualKind {
     /// Radiant intensity, W/sr.
     Point(Illuminant),
     /// Radiant intensity on the axis and the cones.
-    Spot(Illuminant, SpotFalloff, Cone),
+    Spot(Illuminant, SpotFalloff, Cone, f32),
     /// Irradiance, W/m^2, and the sun's disc.
     Sun(Illuminant, Cone),
 }

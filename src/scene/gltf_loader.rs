@@ -340,9 +340,9 @@ impl Builder<'_> {
                     let intensity = Vec3::from(light.color()) * light.intensity() / LUMENS_PER_WATT;
                     self.add_sphere_light(intensity, kelvin, radius, node.index(), name, rig);
                 }
-                (_, Some(radius)) if radius > 0.0 => {
+                (Kind::Directional, Some(radius)) if radius > 0.0 => {
                     self.warnings.push(format!(
-                        "node '{name}': a radius is rendered for point lights only; this light renders as a point"
+                        "node '{name}': a radius is rendered for point and spot lights only; this sun ignores it"
                     ));
                     self.add_punctual_light(&light, node.index(), &extras, kelvin);
                 }
@@ -444,7 +444,8 @@ impl Builder<'_> {
                     Some(blend) => SpotFalloff::Blender { blend },
                     None => SpotFalloff::Gltf { inner: Cone::from_half_angle(inner_cone_angle) },
                 };
-                PunctualKind::Spot(spectrum, falloff, Cone::from_half_angle(outer_cone_angle))
+                let radius = extras.radius.unwrap_or(0.0);
+                PunctualKind::Spot(spectrum, falloff, Cone::from_half_angle(outer_cone_angle), radius)
             }
             Kind::Directional => PunctualKind::Sun(spectrum, sun_disc(extras)),
         };

@@ -527,16 +527,23 @@ def film_and_holdouts():
     return {"Floor": 1, "Grey": 2}
 
 
-def spot_light():
+def spot_light(radius=0.0):
     """A spot light of 70 degrees with Blender's Spot Blend 0.6 above a floor and a ball: the
-    pool of light and its soft edge."""
+    pool of light and its soft edge (and with a `radius`, the ball's soft shadow)."""
     clear()
     matte_floor_and_ball(0.5, (0.8, 0.3, 0.5), segments=48)
     spot = add(bpy.ops.object.light_add, type='SPOT', location=(0.0, 0.0, 3.0))
-    spot.data.energy, spot.data.shadow_soft_size = 1000.0, 0.0
+    spot.data.energy, spot.data.shadow_soft_size = 1000.0, radius
     spot.data.spot_size, spot.data.spot_blend = math.radians(70), 0.6
+    spot.data.use_soft_falloff = False  # as in soft_light: Caustic's sphere has no Soft Falloff
     camera((0.0, -6.0, 5.0), (0.0, 0.0, 0.0))
-    return {"Floor": 1, "Grey": 2, "Edge": floor_ring((0.0, 0.0), 1.2, 2.1)}
+    regions = {"Floor": 1, "Grey": 2, "Edge": floor_ring((0.0, 0.0), 1.2, 2.1)}
+    return {**regions, "Penumbra": penumbra} if radius else regions
+
+
+def soft_spot():
+    """The spot light with Blender's default radius, 0.25: the ball's shadow is soft."""
+    return spot_light(radius=0.25)
 
 
 def floor_ring(centre, inner, outer, floor_index=1):
@@ -596,4 +603,4 @@ SCENES = {"glass": glass, "principled_spheres": principled_spheres, "textured": 
           "coated": coated, "sheen": sheen, "leaf": leaf, "warm_light": warm_light, "soft_light": soft_light,
           "hdri": hdri, "ortho_camera": ortho_camera, "shifted_camera": shifted_camera,
           "panorama_camera": panorama_camera, "film_and_holdouts": film_and_holdouts,
-          "spot_light": spot_light, "sky": sky}
+          "spot_light": spot_light, "soft_spot": soft_spot, "sky": sky}

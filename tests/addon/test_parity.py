@@ -158,6 +158,9 @@ class Parity(unittest.TestCase):
     def test_film_and_holdouts(self):
         self.check("film_and_holdouts")
 
+    def test_soft_spot(self):
+        self.check("soft_spot")
+
     def test_spot_light(self):
         self.check("spot_light")
 
