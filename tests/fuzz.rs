@@ -151,7 +151,8 @@ fn volume_seed() -> Value {
 
 /// A scene with every camera input Caustic reads (an orthographic camera, a shifted perspective
 /// one with a lens, and a panorama on a node of its own, which the scene's extras choose) and the
-/// film's and lights' newer ones (a transparent film, a holdout, a spot with Blender's blend).
+/// film's and lights' newer ones (a transparent film, a holdout, a spot with Blender's blend and a
+/// radius).
 fn camera_seed() -> Value {
     let mut gltf = common::GltfBuilder::default();
     let grey = gltf.material(common::diffuse([0.5, 0.5, 0.5]));
@@ -161,7 +162,7 @@ fn camera_seed() -> Value {
     let spot =
         json!({"type": "spot", "intensity": 500.0, "spot": {"innerConeAngle": 0.2, "outerConeAngle": 0.5}});
     gltf.light(spot, [0.0, 2.0, -3.0], [0.0, -1.0, 0.0]);
-    gltf.set_node_extras(gltf.last_node(), json!({"spot_blend": 0.4}));
+    gltf.set_node_extras(gltf.last_node(), json!({"spot_blend": 0.4, "radius": 0.2}));
     let ortho = json!({"type": "orthographic", "orthographic": {"xmag": 2.0, "ymag": 1.5, "znear": 0.01, "zfar": 50.0}});
     gltf.camera_of(ortho, [0.0, 0.0, 2.0], [0.0, 0.0, -1.0]);
     gltf.camera([0.0, 1.0, 2.0], [0.0, -0.3, -1.0], 0.7);

@@ -70,7 +70,10 @@ fn a_point_light_with_a_radius_is_a_sphere_of_the_same_power() {
         json!({"caustic": {"radius": 0.3}});
     std::fs::write(&path, doc.to_string()).unwrap();
     let warnings = caustic::scene::Description::load(&path).unwrap().warnings;
-    assert!(warnings.iter().any(|w| w.contains("radius is rendered for point and spot lights only")), "{warnings:?}");
+    assert!(
+        warnings.iter().any(|w| w.contains("radius is rendered for point and spot lights only")),
+        "{warnings:?}"
+    );
 }
 
 /// A spot light with a radius (Blender's: a sphere of light inside the spot's cone) lights the
@@ -86,8 +89,14 @@ fn a_spot_light_with_a_radius_lights_as_its_point_and_softens_shadows() {
         gltf.set_node_extras(gltf.last_node(), json!({"radius": radius}));
         if blocker {
             let black = gltf.material(diffuse([0.0, 0.0, 0.0]));
-            gltf.mesh("Blocker", &[[[-0.05, 1.2, -0.05], [0.05, 1.2, 0.05], [0.05, 1.2, -0.05]],
-                [[-0.05, 1.2, -0.05], [-0.05, 1.2, 0.05], [0.05, 1.2, 0.05]]], black);
+            gltf.mesh(
+                "Blocker",
+                &[
+                    [[-0.05, 1.2, -0.05], [0.05, 1.2, 0.05], [0.05, 1.2, -0.05]],
+                    [[-0.05, 1.2, -0.05], [-0.05, 1.2, 0.05], [0.05, 1.2, 0.05]],
+                ],
+                black,
+            );
         }
         mean_luminance(&gltf.write(dir.path(), "spot_sphere"), dir.path())
     };

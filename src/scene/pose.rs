@@ -127,9 +127,14 @@ fn punctual(light: &PunctualLight, world: Mat4) -> Light {
     let axis = world.transform_vector3(-Vec3::Z).normalize();
     match &light.kind {
         PunctualKind::Point(intensity) => Light::Point { position, intensity: *intensity },
-        PunctualKind::Spot(intensity, falloff, outer, radius) => {
-            Light::Spot { position, axis, intensity: *intensity, falloff: *falloff, outer: *outer, radius: *radius }
-        }
+        PunctualKind::Spot(intensity, falloff, outer, radius) => Light::Spot {
+            position,
+            axis,
+            intensity: *intensity,
+            falloff: *falloff,
+            outer: *outer,
+            radius: *radius,
+        },
         PunctualKind::Sun(irradiance, disc) => {
             Light::Sun { direction: axis, irradiance: *irradiance, disc: *disc, sphere: Default::default() }
         }
