@@ -194,7 +194,8 @@ def bake_world(world, folder, width=BAKED_WORLD_WIDTH):
     import subprocess
     import sys
     blend, image = folder / "world.blend", folder / "world.exr"
-    bpy.data.libraries.write(str(blend), {world}, fake_user=True)
+    # Absolute paths: images the world uses by paths relative to the user's .blend still load.
+    bpy.data.libraries.write(str(blend), {world}, fake_user=True, path_remap='ABSOLUTE')
     script = pathlib.Path(__file__).resolve().parent / "bake_world.py"
     arguments = ["--", str(blend), world.name, str(image), str(width)]
     if bpy.app.binary_path:
