@@ -130,7 +130,7 @@ impl Emission {
     /// The radiance at barycentric coordinates `b` and the wavelengths `lambda`.
     fn at(&self, b: Vec2, lambda: &Wavelengths) -> SampledSpectrum {
         match self {
-            Emission::Uniform(radiance) => spectral(radiance, lambda),
+            Emission::Uniform(radiance) => radiance.eval(lambda),
             Emission::Textured(t) => t.texture.eval(&corner_mix(&t.uvs, b), lambda.nm) * lambda.d65,
             Emission::Cut(c) => c.emission.at(b, lambda) * c.opacity(b),
         }
@@ -236,11 +236,6 @@ pub struct EmittedPhoton {
     pub flux: SampledSpectrum,
 }
 
-/// The spectral value of a light's spectrum at the wavelengths `lambda`.
-fn spectral(spectrum: &Illuminant, lambda: &Wavelengths) -> SampledSpectrum {
-    spectrum.eval(lambda)
-}
-
 /// How a spot light dims toward the edge of its cone.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub enum SpotFalloff {
@@ -321,7 +316,7 @@ impl Light {
         match self {
             Light::Point { position, intensity } => {
                 let (wi, distance) = direction_and_distance(p, *position)?;
-                let radiance_over_pdf = spectral(intensity, lambda) / (distance * distance);
+                let radiance_over_pdf = intensity.eval(lambda) / (distance * distance);
                 Some(LightSample { wi, distance, radiance_over_pdf, pdf: 0.0 })
             }
             Light::Spot { position, axis, intensity, falloff, outer, radius } => {
@@ -336,14 +331,14 @@ impl Light {
                     None => (to_centre, centre_distance, 1.0 / (centre_distance * centre_distance)),
                 };
                 let falloff = spot_falloff(one_minus_cos_between(-wi, *axis), *falloff, *outer);
-                let radiance_over_pdf = spectral(intensity, lambda) * (falloff * scale);
+                let radiance_over_pdf = intensity.eval(lambda) * (falloff * scale);
                 (falloff > 0.0).then_some(LightSample { wi, distance, radiance_over_pdf, pdf: 0.0 })
             }
             Light::Sun { direction, irradiance, disc, .. } => {
                 let (t, b) = basis(-*direction);
                 let local = square_to_cone(u, disc.one_minus_cos);
                 let wi = (t * local.x + b * local.y - *direction * local.z).normalize();
-                let radiance_over_pdf = spectral(irradiance, lambda);
+                let radiance_over_pdf = irradiance.eval(lambda);
                 let pdf = if disc.is_delta() { 0.0 } else { 1.0 / disc.solid_angle() };
                 Some(LightSample { wi, distance: f32::INFINITY, radiance_over_pdf, pdf })
             }
@@ -393,7 +388,7 @@ impl Light {
             Light::Sun { direction, irradiance, disc, .. }
                 if !disc.is_delta() && disc.contains(-*direction, dir) =>
             {
-                spectral(irradiance, lambda) / disc.solid_angle()
+                irradiance.eval(lambda) / disc.solid_angle()
             }
             Light::World(world) => world.radiance(dir, lambda),
             _ => SampledSpectrum::ZERO,
@@ -411,7 +406,7 @@ impl Light {
             Light::Point { position, intensity } => EmittedPhoton {
                 origin: *position,
                 direction: square_to_sphere(u_direction),
-                flux: spectral(intensity, lambda) * 4.0 * PI,
+                flux: intensity.eval(lambda) * 4.0 * PI,
             },
             Light::Spot { position, axis, intensity, falloff, outer, radius } => {
                 let (t, b) = basis(*axis);
@@ -422,7 +417,7 @@ impl Light {
                 EmittedPhoton {
                     origin: *position + sphere_point_facing(direction, *radius, u_position),
                     direction,
-                    flux: spectral(intensity, lambda) * falloff * solid_angle,
+                    flux: intensity.eval(lambda) * falloff * solid_angle,
                 }
             }
             Light::Sun { direction, irradiance, disc, sphere } => {
@@ -432,7 +427,7 @@ impl Light {
                 EmittedPhoton {
                     origin: disc_origin(sphere, direction, u_position),
                     direction,
-                    flux: spectral(irradiance, lambda) * PI * sphere.radius * sphere.radius,
+                    flux: irradiance.eval(lambda) * PI * sphere.radius * sphere.radius,
                 }
             }
             Light::Triangle(triangle) => {
