@@ -302,8 +302,9 @@ def holdout_objects(view_layer):
 
 
 def node_extras(blender_object):
-    """What the exporter drops from an object: area lights, the sun's angle, a point light's
-    radius, a light's colour temperature, the camera's lens, shift and panorama."""
+    """What the exporter drops from an object: area lights, the sun's angle, a point or spot
+    light's radius, a light's colour temperature and whether the camera sees it, the camera's
+    lens, shift and panorama."""
     if blender_object.type == 'LIGHT':
         light = blender_object.data
         extras = {}
@@ -315,6 +316,8 @@ def node_extras(blender_object):
             extras["radius"] = light.shadow_soft_size
         if light.type == 'SPOT':
             extras["spot_blend"] = light.spot_blend
+        if not blender_object.visible_camera:
+            extras["visible_to_camera"] = False
         if light.name in _temperatures:
             extras["temperature_k"] = _temperatures[light.name]
         return extras or None
@@ -528,9 +531,6 @@ def scene_warnings(depsgraph):
         if light.type == 'AREA' and light.spread < math.pi - 1e-4:
             warnings.append(f"light '{light.name}': an area light's Spread is not rendered; it spreads over 180 "
                             "degrees")
-        if light.type == 'SPOT' and light.shadow_soft_size > 0:
-            warnings.append(f"light '{light.name}': a spot light's sphere casts soft shadows but is not seen by the "
-                            "camera or in mirror-like reflections")
         if light.type in ('POINT', 'SPOT') and light.shadow_soft_size > 0 and getattr(light, "use_soft_falloff", False):
             warnings.append(f"light '{light.name}': Soft Falloff is not rendered: the light is a sphere, which lights "
                             "surfaces within a few radii of it more than Blender's falloff does")

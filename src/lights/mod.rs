@@ -11,18 +11,20 @@
 //!
 //! Distant lights (sun, world) emit photons from a disc covering the scene's bounding sphere.
 
+mod sphere;
 mod world;
 
+pub use sphere::{Beam, SphereLight, SpotFalloff};
 pub use world::World;
 
 use glam::{Vec2, Vec3, Vec3A};
 use std::f32::consts::PI;
 use std::sync::Arc;
 
-use crate::geometry::{corners_scale, offset_origin, one_minus_cos_between, Cone};
+use crate::geometry::{corners_scale, offset_origin, Cone};
 use crate::materials::{Alpha, SurfaceInputs};
 use crate::sampling::{
-    basis, square_to_cone, square_to_cosine_hemisphere, square_to_disc, square_to_sphere, square_to_triangle,
+    basis, square_to_cone, square_to_cosine_hemisphere, square_to_disc, square_to_triangle,
 };
 use crate::spectrum::{Illuminant, SampledSpectrum, Wavelengths};
 use crate::texture::{Texture, UV_SETS};
@@ -39,28 +41,8 @@ pub struct BoundingSphere {
 /// A light source.
 #[derive(Clone, Debug)]
 pub enum Light {
-    /// An isotropic point light of radiant intensity `intensity` (W/sr).
-    Point {
-        /// Position.
-        position: Vec3,
-        /// Radiant intensity spectrum, W/sr.
-        intensity: Illuminant,
-    },
-    /// A spot light: a point light inside a cone, with glTF's or Blender's smooth falloff.
-    Spot {
-        /// Position.
-        position: Vec3,
-        /// Unit axis of the cone (the direction light travels).
-        axis: Vec3,
-        /// Radiant intensity on the axis, W/sr.
-        intensity: Illuminant,
-        /// How it falls off toward the cone's edge.
-        falloff: SpotFalloff,
-        /// The outer cone (no light outside).
-        outer: Cone,
-        /// The radius of its sphere (Blender's spot radius: soft shadows), or 0 for a point.
-        radius: f32,
-    },
+    /// A point or spot light, with Blender's radius or without.
+    Sphere(SphereLight),
     /// A distant light with an angular diameter (soft shadows) or none.
     Sun {
         /// Unit direction the light travels.
@@ -236,38 +218,6 @@ pub struct EmittedPhoton {
     pub flux: SampledSpectrum,
 }
 
-/// How a spot light dims toward the edge of its cone.
-#[derive(Clone, Copy, Debug, PartialEq)]
-pub enum SpotFalloff {
-    /// glTF's: the square of a linear ramp in cosine from the outer cone to this inner one.
-    Gltf {
-        /// The inner cone (full intensity inside).
-        inner: Cone,
-    },
-    /// Blender's Spot Blend, as Cycles renders it: a smoothstep in cosine over the last `blend`
-    /// of the cone's `1 - cos` (0: a hard edge).
-    Blender {
-        /// Blender's Spot Blend, in [0, 1].
-        blend: f32,
-    },
-}
-
-/// The spot falloff for a direction whose `1 - cos` from the axis is `one_minus_cos`.
-fn spot_falloff(one_minus_cos: f32, falloff: SpotFalloff, outer: Cone) -> f32 {
-    let width = match falloff {
-        SpotFalloff::Gltf { inner } => outer.one_minus_cos - inner.one_minus_cos,
-        SpotFalloff::Blender { blend } => outer.one_minus_cos * blend,
-    };
-    if width <= 0.0 {
-        return if one_minus_cos <= outer.one_minus_cos { 1.0 } else { 0.0 };
-    }
-    let t = ((outer.one_minus_cos - one_minus_cos) / width).clamp(0.0, 1.0);
-    match falloff {
-        SpotFalloff::Gltf { .. } => t * t,
-        SpotFalloff::Blender { .. } => t * t * (3.0 - 2.0 * t),
-    }
-}
-
 /// A point on the disc of `sphere` facing `direction`, upstream of the scene.
 fn disc_origin(sphere: &BoundingSphere, direction: Vec3, u: Vec2) -> Vec3 {
     let (t, b) = basis(direction);
@@ -280,7 +230,7 @@ impl Light {
     /// triangle's centroid; `None` for lights at infinity.
     pub fn centre(&self) -> Option<Vec3> {
         match self {
-            Light::Point { position, .. } | Light::Spot { position, .. } => Some(*position),
+            Light::Sphere(sphere) => Some(sphere.position),
             Light::Triangle(t) => Some((t.corners[0] + t.corners[1] + t.corners[2]) / 3.0),
             Light::Sun { .. } | Light::World(_) => None,
         }
@@ -289,8 +239,7 @@ impl Light {
     /// Total emitted luminous power, for choosing lights in proportion to it.
     pub fn power(&self) -> f64 {
         let power = match self {
-            Light::Point { intensity, .. } => 4.0 * PI as f64 * intensity.luminance(),
-            Light::Spot { intensity, outer, .. } => f64::from(outer.solid_angle()) * intensity.luminance(),
+            Light::Sphere(sphere) => sphere.power(),
             Light::Sun { irradiance, sphere, .. } => {
                 irradiance.luminance() * f64::from(PI * sphere.radius * sphere.radius)
             }
@@ -314,26 +263,7 @@ impl Light {
     /// Samples light arriving at `p` (for next-event estimation); `None` when none arrives.
     pub fn sample_incident(&self, p: Vec3, u: Vec2, lambda: &Wavelengths) -> Option<LightSample> {
         match self {
-            Light::Point { position, intensity } => {
-                let (wi, distance) = direction_and_distance(p, *position)?;
-                let radiance_over_pdf = intensity.eval(lambda) / (distance * distance);
-                Some(LightSample { wi, distance, radiance_over_pdf, pdf: 0.0 })
-            }
-            Light::Spot { position, axis, intensity, falloff, outer, radius } => {
-                let (to_centre, centre_distance) = direction_and_distance(p, *position)?;
-                // A sphere of intensity I shows radiance I / (pi r^2): a sample carries that times
-                // the solid angle it was drawn over (I / d^2 for a point, or from inside), dimmed
-                // by the spot's falloff along the sample's own direction (so the sphere softens
-                // the pool's edge too, as in Cycles). Its pdf is left 0, as a point's: rays do not
-                // hit the sphere, so this term takes all the weight.
-                let (wi, distance, scale) = match sphere_sample(to_centre, centre_distance, *radius, u) {
-                    Some((wi, distance, solid_angle)) => (wi, distance, solid_angle / (PI * radius * radius)),
-                    None => (to_centre, centre_distance, 1.0 / (centre_distance * centre_distance)),
-                };
-                let falloff = spot_falloff(one_minus_cos_between(-wi, *axis), *falloff, *outer);
-                let radiance_over_pdf = intensity.eval(lambda) * (falloff * scale);
-                (falloff > 0.0).then_some(LightSample { wi, distance, radiance_over_pdf, pdf: 0.0 })
-            }
+            Light::Sphere(sphere) => sphere.sample_incident(p, u, lambda),
             Light::Sun { direction, irradiance, disc, .. } => {
                 let (t, b) = basis(-*direction);
                 let local = square_to_cone(u, disc.one_minus_cos);
@@ -377,6 +307,7 @@ impl Light {
                 1.0 / disc.solid_angle()
             }
             Light::World(world) => world.pdf(wi),
+            Light::Sphere(sphere) => sphere.pdf_incident(p),
             _ => 0.0,
         }
     }
@@ -403,23 +334,7 @@ impl Light {
         lambda: &Wavelengths,
     ) -> Option<EmittedPhoton> {
         let photon = match self {
-            Light::Point { position, intensity } => EmittedPhoton {
-                origin: *position,
-                direction: square_to_sphere(u_direction),
-                flux: intensity.eval(lambda) * 4.0 * PI,
-            },
-            Light::Spot { position, axis, intensity, falloff, outer, radius } => {
-                let (t, b) = basis(*axis);
-                let local = square_to_cone(u_direction, outer.one_minus_cos);
-                let falloff = spot_falloff(u_direction.x * outer.one_minus_cos, *falloff, *outer);
-                let solid_angle = outer.solid_angle();
-                let direction = (t * local.x + b * local.y + *axis * local.z).normalize();
-                EmittedPhoton {
-                    origin: *position + sphere_point_facing(direction, *radius, u_position),
-                    direction,
-                    flux: intensity.eval(lambda) * falloff * solid_angle,
-                }
-            }
+            Light::Sphere(sphere) => sphere.emit_photon(u_position, u_direction, lambda),
             Light::Sun { direction, irradiance, disc, sphere } => {
                 let (t, b) = basis(*direction);
                 let local = square_to_cone(u_direction, disc.one_minus_cos);
@@ -468,35 +383,6 @@ impl Light {
 }
 
 /// Unit direction from `p` to `q` and their distance; `None` if they coincide.
-/// A direction from a point toward a sphere of `radius` whose centre lies `distance` along the
-/// unit `to_centre`, uniform over the solid angle the sphere covers: (direction, distance to the
-/// sphere along it, that solid angle); `None` for a point (radius 0) or from inside.
-fn sphere_sample(to_centre: Vec3, distance: f32, radius: f32, u: Vec2) -> Option<(Vec3, f32, f32)> {
-    if !(radius > 0.0 && distance > radius) {
-        return None;
-    }
-    let sin2_max = (radius / distance).powi(2);
-    let one_minus_cos_max = sin2_max / (1.0 + (1.0 - sin2_max).sqrt());
-    let local = square_to_cone(u, one_minus_cos_max);
-    let (t, b) = basis(to_centre);
-    let wi = (t * local.x + b * local.y + to_centre * local.z).normalize();
-    let along = distance * local.z;
-    let hit = along - (radius * radius - distance * distance * (1.0 - local.z * local.z)).max(0.0).sqrt();
-    Some((wi, hit, 2.0 * PI * one_minus_cos_max))
-}
-
-/// Where on a sphere of `radius` about its centre a photon leaving along `direction` starts: a
-/// uniform point of the disc the sphere shows that way, on its surface (the sphere emits the
-/// same intensity in every direction, from its projected disc).
-fn sphere_point_facing(direction: Vec3, radius: f32, u: Vec2) -> Vec3 {
-    if radius <= 0.0 {
-        return Vec3::ZERO;
-    }
-    let (t, b) = basis(direction);
-    let d = square_to_disc(u);
-    radius * (t * d.x + b * d.y + direction * (1.0 - d.length_squared()).max(0.0).sqrt())
-}
-
 fn direction_and_distance(p: Vec3, q: Vec3) -> Option<(Vec3, f32)> {
     let d = q - p;
     let distance = d.length();
@@ -505,19 +391,6 @@ fn direction_and_distance(p: Vec3, q: Vec3) -> Option<(Vec3, f32)> {
 
 #[cfg(test)]
 mod tests {
-    #[test]
-    fn blenders_spot_blend_is_a_smoothstep_over_the_cones_last_share() {
-        let outer = Cone::from_half_angle(0.6);
-        let blender = SpotFalloff::Blender { blend: 0.5 };
-        let at = |share: f32| spot_falloff(outer.one_minus_cos * share, blender, outer);
-        assert_eq!(at(1.01), 0.0);
-        assert_eq!(at(0.4), 1.0);
-        // Halfway through the blended last half of 1 - cos: smoothstep(0.5) = 0.5; a quarter: 0.15625.
-        assert!((at(0.75) - 0.5).abs() < 1e-5, "{}", at(0.75));
-        assert!((at(0.875) - 0.15625).abs() < 1e-5, "{}", at(0.875));
-        assert_eq!(spot_falloff(outer.one_minus_cos * 0.99, SpotFalloff::Blender { blend: 0.0 }, outer), 1.0);
-    }
-
     use super::*;
 
     #[test]

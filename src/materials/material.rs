@@ -83,6 +83,9 @@ pub struct Material {
     /// transparent and black: Blender's holdout (the Holdout shader, or an object in a holdout
     /// collection). Elsewhere it renders as its other fields say.
     pub holdout: bool,
+    /// Whether the camera sees its emission (false for a light Blender hides from the camera;
+    /// reflections see it either way).
+    pub seen_by_camera: bool,
 }
 
 /// What a path meets at a surface point: a BSDF in its frame, and the factor on the path's
@@ -229,6 +232,7 @@ impl Material {
             volume: None,
             priority: 0,
             holdout: false,
+            seen_by_camera: true,
         }
     }
 

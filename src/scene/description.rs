@@ -36,10 +36,17 @@ pub struct MeshInstance {
 /// A punctual light's kind and emission (see `crate::lights` for units).
 #[derive(Clone, Debug)]
 pub enum PunctualKind {
-    /// Radiant intensity, W/sr.
-    Point(Illuminant),
-    /// Radiant intensity on the axis and the cones.
-    Spot(Illuminant, SpotFalloff, Cone, f32),
+    /// A point or spot light (posed as a [`crate::lights::SphereLight`]).
+    Sphere {
+        /// Radiant intensity (on the axis, for a spot), W/sr.
+        intensity: Illuminant,
+        /// Its radius (0 for a point).
+        radius: f32,
+        /// A spot's falloff and outer cone; `None` for a point light.
+        beam: Option<(SpotFalloff, Cone)>,
+        /// Whether the camera sees its sphere.
+        seen_by_camera: bool,
+    },
     /// Irradiance, W/m^2, and the sun's disc.
     Sun(Illuminant, Cone),
 }

@@ -124,8 +124,11 @@ pub struct NodeExtras {
     /// Blender's Spot Blend of the node's spot light, in [0, 1]: its falloff is then Blender's
     /// smoothstep rather than glTF's ramp between the cones.
     pub spot_blend: Option<f32>,
-    /// The radius of the node's point light (Blender's): it becomes an emitting sphere.
+    /// The radius of the node's point or spot light (Blender's): it becomes an emitting sphere.
     pub radius: Option<f32>,
+    /// Whether the camera sees the node's light (a point or spot light's sphere, an area
+    /// light): Blender's Ray Visibility > Camera. Reflections see it either way. Default: true.
+    pub visible_to_camera: Option<bool>,
     /// The colour temperature of the node's light, kelvin (Blender's `use_temperature`): its
     /// colour is multiplied by a black body's.
     pub temperature_k: Option<f32>,

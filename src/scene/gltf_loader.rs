@@ -22,7 +22,7 @@ use super::animation::{Interpolation, NodeMotion, Rig, Track};
 use super::description::{
     CameraInstance, Description, LensSettings, MeshInstance, PunctualKind, PunctualLight, Shutter,
 };
-use super::extras::{self, AreaLightExtras, NodeExtras, SceneExtras, ShutterExtras, ShutterPosition};
+use super::extras::{self, NodeExtras, SceneExtras, ShutterExtras, ShutterPosition};
 use super::gltf_materials::material;
 use super::{shapes, tangents, SceneError, TriangleRef, VertexExtras};
 use crate::camera::Projection;
@@ -336,10 +336,6 @@ impl Builder<'_> {
                         "node '{name}' extras `caustic.radius`: expected a light radius of 0 or more, got {radius}"
                     ));
                 }
-                (Kind::Point, Some(radius)) if radius > 0.0 => {
-                    let intensity = Vec3::from(light.color()) * light.intensity() / LUMENS_PER_WATT;
-                    self.add_sphere_light(intensity, kelvin, radius, node.index(), name, rig);
-                }
                 (Kind::Directional, Some(radius)) if radius > 0.0 => {
                     self.warnings.push(format!(
                         "node '{name}': a radius is rendered for point and spot lights only; this sun ignores it"
@@ -349,9 +345,7 @@ impl Builder<'_> {
                 _ => self.add_punctual_light(&light, node.index(), &extras, kelvin),
             }
         }
-        if let Some(area) = &extras.area_light {
-            self.add_area_light(area, node.index(), name, rig, kelvin)?;
-        }
+        self.add_area_light(&extras, node.index(), name, rig)?;
         for child in node.children() {
             self.visit(&child, rig)?;
         }
@@ -437,15 +431,20 @@ impl Builder<'_> {
     ) {
         let colour = Vec3::from(light.color()) * light.intensity() / LUMENS_PER_WATT;
         let spectrum = Illuminant::new(colour, kelvin);
+        let sphere = |beam| PunctualKind::Sphere {
+            intensity: spectrum,
+            radius: extras.radius.unwrap_or(0.0),
+            beam,
+            seen_by_camera: extras.visible_to_camera.unwrap_or(true),
+        };
         let kind = match light.kind() {
-            Kind::Point => PunctualKind::Point(spectrum),
+            Kind::Point => sphere(None),
             Kind::Spot { inner_cone_angle, outer_cone_angle } => {
                 let falloff = match extras.spot_blend {
                     Some(blend) => SpotFalloff::Blender { blend },
                     None => SpotFalloff::Gltf { inner: Cone::from_half_angle(inner_cone_angle) },
                 };
-                let radius = extras.radius.unwrap_or(0.0);
-                PunctualKind::Spot(spectrum, falloff, Cone::from_half_angle(outer_cone_angle), radius)
+                sphere(Some((falloff, Cone::from_half_angle(outer_cone_angle))))
             }
             Kind::Directional => PunctualKind::Sun(spectrum, sun_disc(extras)),
         };
@@ -455,68 +454,37 @@ impl Builder<'_> {
     /// An area light becomes one-sided emitting triangles with radiance P / (pi A), A its area
     /// at the scene's rest pose, that every ray passes through unchanged (a thin wall of index 1),
     /// as Blender's lights do: they cast no shadow and hide nothing behind them.
-    fn add_area_light(
-        &mut self,
-        area: &AreaLightExtras,
-        node: usize,
-        name: &str,
-        rig: &Rig,
-        kelvin: Option<f32>,
-    ) -> Result<(), String> {
+    fn add_area_light(&mut self, extras: &NodeExtras, node: usize, name: &str, rig: &Rig) -> Result<(), String> {
+        let Some(area) = &extras.area_light else {
+            return Ok(());
+        };
         if !(area.size > 0.0 && area.power >= 0.0 && area.size.is_finite() && area.power.is_finite()) {
             return Err(format!("node '{name}' area light: size must be positive and power non-negative"));
         }
         let local = shapes::area_light_triangles(area);
         let area_m2 = world_area(&local, rig, node);
         let colour = Vec3::from(area.color) * area.power / (std::f32::consts::PI * area_m2);
-        let radiance = Illuminant::new(colour, kelvin);
-        let normals = vec![-Vec3::Z; 3 * local.len()];
-        self.add_light_mesh(node, format!("area light '{name}'"), &local, normals, radiance);
-        Ok(())
-    }
-
-    /// A point light of `radius` (Blender's, from the extras) becomes an emitting sphere, as Cycles
-    /// renders it: radiance `4 I / A` from its outer faces of area A, so that it emits the power
-    /// `4 pi I` of the point light of intensity I (W/sr) it replaces, passed through like an area
-    /// light.
-    fn add_sphere_light(
-        &mut self,
-        intensity: Vec3,
-        kelvin: Option<f32>,
-        radius: f32,
-        node: usize,
-        name: &str,
-        rig: &Rig,
-    ) {
-        let local = shapes::sphere_triangles(radius);
-        let area_m2 = world_area(&local, rig, node);
-        let radiance = Illuminant::new(intensity * 4.0 / area_m2, kelvin);
-        let normals = local.iter().flatten().map(|p| p.normalize_or_zero()).collect();
-        self.add_light_mesh(node, format!("sphere light '{name}'"), &local, normals, radiance);
-    }
-
-    /// An emitter of `radiance` from the front faces of `local` triangles on `node` (with
-    /// `normals` at their corners), which every ray passes through unchanged (a thin wall of
-    /// index 1), as Blender's lights do: they cast no shadow and hide nothing behind them.
-    fn add_light_mesh(
-        &mut self,
-        node: usize,
-        name: String,
-        local: &[[Vec3; 3]],
-        normals: Vec<Vec3>,
-        radiance: Illuminant,
-    ) {
-        let material = self.materials.len() as u32;
-        self.materials.push(Material {
-            name: name.clone(),
+        let material = Material {
+            name: format!("area light '{name}'"),
             base_colour: BaseColour::Constant(RgbSpectrum::constant(0.0)),
-            emission: Some(radiance),
+            emission: Some(Illuminant::new(colour, light_temperature(extras, name)?)),
             emits_both_sides: false,
             transmission: 1.0,
             ior: Dispersion::Constant(1.0),
             thin: true,
+            seen_by_camera: extras.visible_to_camera.unwrap_or(true),
             ..Material::default_grey()
-        });
+        };
+        self.add_light_mesh(node, material, &local);
+        Ok(())
+    }
+
+    /// The triangles `local` on `node` emitting from their front faces with `material`.
+    fn add_light_mesh(&mut self, node: usize, material: Material, local: &[[Vec3; 3]]) {
+        let name = material.name.clone();
+        self.materials.push(material);
+        let material = self.materials.len() as u32 - 1;
+        let normals = vec![-Vec3::Z; 3 * local.len()];
         let positions: Vec<Vec3> = local.iter().flatten().copied().collect();
         let triangles = (0..local.len() as u32)
             .map(|k| TriangleRef { vertices: [3 * k, 3 * k + 1, 3 * k + 2], material })

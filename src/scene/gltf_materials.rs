@@ -95,6 +95,7 @@ pub fn material(
         emits_both_sides: true,
         thin: false,
         holdout: false,
+        seen_by_camera: true,
     })
 }
 

@@ -27,7 +27,7 @@ use glam::{Vec2, Vec3, Vec3A};
 
 use crate::accel::{Bvh, Hit};
 use crate::camera::Camera;
-use crate::lights::{BoundingSphere, Light};
+use crate::lights::{BoundingSphere, Light, SphereLight};
 use crate::materials::{Material, ShadingFrame, SurfaceInputs};
 use crate::spectrum::{SampledSpectrum, Wavelengths};
 use crate::texture::UV_SETS;
@@ -138,6 +138,8 @@ pub struct Scene {
     pub open_edges: Arc<OpenEdges>,
     /// Indices in `lights` of the distant lights a ray leaving the scene can see.
     pub distant_lights: Vec<usize>,
+    /// Indices in `lights` of the lights with a sphere that rays can meet.
+    pub sphere_lights: Vec<usize>,
     /// Indices in `lights` of the lights that move within the prepared range.
     pub moving_lights: std::ops::Range<usize>,
     /// The camera at this time.
@@ -211,6 +213,20 @@ impl Scene {
     /// Radiance that a ray of direction `dir` receives when it leaves the scene.
     pub fn escaped_radiance(&self, dir: Vec3, lambda: &Wavelengths) -> SampledSpectrum {
         self.distant_lights.iter().map(|&i| self.lights[i].escaped_radiance(dir, lambda)).sum()
+    }
+
+    /// The sphere lights a ray from `origin` along the unit `direction` meets before `t_max`
+    /// (they hide nothing behind them): each one's index in `lights`, the light and the distance.
+    pub fn spheres_met(
+        &self,
+        origin: Vec3,
+        direction: Vec3,
+        t_max: f32,
+    ) -> impl Iterator<Item = (usize, &SphereLight, f32)> + '_ {
+        self.sphere_lights.iter().filter_map(move |&i| match &self.lights[i] {
+            Light::Sphere(sphere) => sphere.hit(origin, direction, t_max).map(|t| (i, sphere, t)),
+            _ => None,
+        })
     }
 
     /// The sphere around every triangle (radius 1 at the origin for an empty scene).

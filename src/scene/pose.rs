@@ -15,7 +15,7 @@ use super::{
 };
 use crate::accel::Bvh;
 use crate::camera::Camera;
-use crate::lights::{BoundingSphere, CutEmission, Emission, EmittingTriangle, Light, TexturedEmission};
+use crate::lights::{Beam, BoundingSphere, CutEmission, Emission, EmittingTriangle, Light, SphereLight, TexturedEmission};
 use crate::materials::Material;
 
 /// A span of glTF time, in seconds, that a render covers (frames and their shutters).
@@ -126,15 +126,13 @@ fn punctual(light: &PunctualLight, world: Mat4) -> Light {
     let position = world.transform_point3(Vec3::ZERO);
     let axis = world.transform_vector3(-Vec3::Z).normalize();
     match &light.kind {
-        PunctualKind::Point(intensity) => Light::Point { position, intensity: *intensity },
-        PunctualKind::Spot(intensity, falloff, outer, radius) => Light::Spot {
+        PunctualKind::Sphere { intensity, radius, beam, seen_by_camera } => Light::Sphere(SphereLight {
             position,
-            axis,
             intensity: *intensity,
-            falloff: *falloff,
-            outer: *outer,
             radius: *radius,
-        },
+            beam: beam.map(|(falloff, outer)| Beam { axis, falloff, outer }),
+            seen_by_camera: *seen_by_camera,
+        }),
         PunctualKind::Sun(irradiance, disc) => {
             Light::Sun { direction: axis, irradiance: *irradiance, disc: *disc, sphere: Default::default() }
         }
@@ -283,6 +281,9 @@ impl Prepared {
                 }
             }
         }
+        let sphere_lights =
+            lights.iter().enumerate().filter(|(_, l)| matches!(l, Light::Sphere(s) if s.radius > 0.0)).map(|(i, _)| i);
+        let sphere_lights = sphere_lights.collect();
         if let Some(world) = &d.world {
             let mut world = world.clone();
             world.sphere = sphere;
@@ -299,6 +300,7 @@ impl Prepared {
             moving_triangle_lights,
             open_edges,
             distant_lights,
+            sphere_lights,
             moving_lights,
             camera: Camera::from_node(camera_world, d.camera.projection, d.camera.shift).with_lens(self.lens),
             resolution: d.resolution,

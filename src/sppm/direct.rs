@@ -156,6 +156,16 @@ impl DirectLight<'_> {
             Some(h) => h.t,
             None => f32::INFINITY,
         };
+        // Sphere lights on the way hide nothing behind them: what they add needs the ray free to
+        // the farthest of them.
+        let (spheres, reach) = scene.spheres_met(origin, sample.wi, t_max).fold(
+            (SampledSpectrum::ZERO, 0.0f32),
+            |(sum, reach), (i, sphere, t)| {
+                let weight = power_heuristic(sample.pdf, light_pdf(i, Vec3::ZERO)) * through;
+                let radiance = sphere.radiance(-sample.wi, wavelengths) * self.kept(sample.wi, t);
+                (sum + sample.weight * radiance * weight, reach.max(t))
+            },
+        );
         let sample = BsdfSample { weight: sample.weight * through * self.kept(sample.wi, t_max), ..sample };
         let ray = Some(ShadowRay { origin, direction: sample.wi, t_max });
         let Some(hit) = hit else {
@@ -166,18 +176,19 @@ impl DirectLight<'_> {
                     let radiance = scene.lights[i].escaped_radiance(sample.wi, wavelengths);
                     sample.weight * radiance * power_heuristic(sample.pdf, light_pdf(i, Vec3::ZERO))
                 })
-                .sum();
-            return DirectTerm { value, ray };
+                .sum::<SampledSpectrum>();
+            return DirectTerm { value: value + spheres, ray };
         };
         let light = scene.triangle_light(hit.triangle);
         if light == NOT_A_LIGHT {
-            return DirectTerm::ZERO;
+            let ray = Some(ShadowRay { origin, direction: sample.wi, t_max: reach });
+            return if reach > 0.0 { DirectTerm { value: spheres, ray } } else { DirectTerm::ZERO };
         }
         let surface = scene.surface(&hit, wavelengths);
         let material = &scene.materials[surface.material as usize];
         let radiance = material.emitted(&surface.inputs, wavelengths, surface.frame.ng(), -sample.wi);
         let value =
             sample.weight * radiance * power_heuristic(sample.pdf, light_pdf(light as usize, surface.p));
-        DirectTerm { value, ray }
+        DirectTerm { value: value + spheres, ray }
     }
 }

@@ -31,7 +31,8 @@ use super::renderer::{PassSamples, PassStats, Renderer, VisiblePoint, MAX_DEPTH}
 use crate::geometry::offset_origin;
 use crate::materials::{Bsdf, Lobe, Transport};
 use crate::sampling::{pixel_stream, PixelSampler};
-use crate::spectrum::{hero_only, SampledSpectrum};
+use crate::accel::Hit;
+use crate::spectrum::{hero_only, SampledSpectrum, Wavelengths};
 
 /// A pixel's eye path: the radiance found along it, and its visible point if it has one.
 #[derive(Clone, Copy, Debug)]
@@ -158,6 +159,9 @@ pub fn continue_eye_path(
             state.beta *=
                 state.media.transmittance(scene, &pass.wavelengths, length).unwrap_or(SampledSpectrum::ONE);
         }
+        if !state.lights_sampled && !scene.sphere_lights.is_empty() {
+            state.radiance += state.beta * spheres_seen(renderer, &state, hit, &pass.wavelengths);
+        }
         let Some(hit) = hit else {
             if state.camera_ray && scene.transparent_film {
                 coverage = 0.0;
@@ -171,7 +175,7 @@ pub fn continue_eye_path(
         let material = &scene.materials[surface.material as usize];
         let wo = -Vec3::from(state.direction);
         // A holdout the camera sees shows nothing, its emission neither.
-        if !state.lights_sampled && !(state.camera_ray && material.holdout) {
+        if !state.lights_sampled && !(state.camera_ray && (material.holdout || !material.seen_by_camera)) {
             state.radiance +=
                 state.beta * material.emitted(&surface.inputs, &pass.wavelengths, surface.frame.ng(), wo);
         }
@@ -235,6 +239,19 @@ pub fn continue_eye_path(
     }
     let result = EyeResult { radiance: state.radiance, point, coverage };
     (EyeEnd { result, radiance_before, direct }, stats)
+}
+
+/// The radiance of the sphere lights an eye segment from `state` meets before its `hit` (the
+/// camera's own ray sees only those visible to the camera).
+fn spheres_seen(renderer: &Renderer, state: &EyeState, hit: Option<Hit>, lambda: &Wavelengths) -> SampledSpectrum {
+    let direction = Vec3::from(state.direction);
+    let t_max = hit.map_or(f32::INFINITY, |h| h.t);
+    renderer
+        .scene
+        .spheres_met(state.origin.into(), direction, t_max)
+        .filter(|(_, sphere, _)| sphere.seen_by_camera || !state.camera_ray)
+        .map(|(_, sphere, _)| sphere.radiance(-direction, lambda))
+        .sum()
 }
 
 /// The radiance of an eye path: what it found before its visible point plus the direct light

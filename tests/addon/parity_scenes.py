@@ -546,6 +546,45 @@ def soft_spot():
     return spot_light(radius=0.25)
 
 
+def seen_sphere(centre, radius):
+    """The pixels within 0.6 of the projected radius of a sphere of `radius` at `centre`, for the
+    current camera (the sphere's edge left out)."""
+    scene = bpy.context.scene
+    bpy.context.view_layer.update()
+    centre = mathutils.Vector(centre)
+    right = scene.camera.matrix_world.to_3x3() @ mathutils.Vector((1.0, 0.0, 0.0))
+    (x, y, _), (x1, y1, _) = (world_to_camera_view(scene, scene.camera, p) for p in (centre, centre + radius * right))
+    reach = 0.6 * math.hypot(x1 - x, y1 - y) * SIZE
+    rows, columns = np.mgrid[0:SIZE, 0:SIZE] + 0.5
+    inside = np.hypot(rows - (1 - y) * SIZE, columns - x * SIZE) < reach
+    return lambda index, reference: inside
+
+
+def lights_seen():
+    """A mirror ball on a matte floor reflecting a point light and a spot light of radius 0.4
+    (Blender's spheres) and an area light. The camera sees the point light (its Ray Visibility >
+    Camera on) but not the spot light (off, Blender's default): where the spot light stands, the
+    floor shows."""
+    clear()
+    matte_floor = principled("Floor", Base_Color=(0.5, 0.5, 0.5, 1.0), Roughness=1.0, Specular_IOR_Level=0.0)
+    add(bpy.ops.mesh.primitive_plane_add, matte_floor, index=1, size=20)
+    add(bpy.ops.mesh.primitive_uv_sphere_add, principled("Mirror", Metallic=1.0, Roughness=0.0), index=2,
+        segments=96, ring_count=48, radius=1.0, location=(0.0, 0.5, 1.0))
+    bpy.ops.object.shade_smooth()
+    world((0.02, 0.02, 0.02))
+    point = add(bpy.ops.object.light_add, type='POINT', location=(1.6, -1.0, 0.8))
+    spot = add(bpy.ops.object.light_add, type='SPOT', location=(-1.6, -1.0, 0.8))
+    spot.rotation_euler = (mathutils.Vector((0.0, 0.5, 0.5)) - spot.location).to_track_quat('-Z', 'Y').to_euler()
+    for light in (point, spot):
+        light.data.energy, light.data.shadow_soft_size, light.data.use_soft_falloff = 200.0, 0.4, False
+    spot.data.spot_size, spot.data.spot_blend = math.radians(90), 0.3
+    point.visible_camera, spot.visible_camera = True, False
+    area_light((0.0, -2.0, 3.0), (0.0, 0.5, 1.0), 0.8, 100.0)
+    camera((0.0, -6.0, 1.2), (0.0, 0.0, 0.9))
+    return {"Floor": 1, "Mirror": 2, "Point light": seen_sphere(point.location, 0.4),
+            "Behind the spot light": seen_sphere(spot.location, 0.4)}
+
+
 def floor_ring(centre, inner, outer, floor_index=1):
     """The floor's pixels (rim left out) between `inner` and `outer` of `centre` (x, y on the
     floor), for the current camera."""
@@ -590,8 +629,8 @@ TOLERANCES = {"glass": 0.07}
 # The scenes Caustic renders with more passes than the test's default: a focused caustic's
 # kernel blur (the radius sequence's bias) takes its peak 7% down at 256 passes, 1.5% at 2048;
 # a sky's sun, a sub-pixel spot of the baked image, lights a floor within 5% of Cycles' only
-# from about a thousand passes.
-PASSES = {"glass": 1024, "sky": 1024}
+# from about a thousand passes; so do the small reflections of lights in a mirror ball.
+PASSES = {"glass": 1024, "sky": 1024, "lights_seen": 1024}
 
 # Regions whose brightest pixel lands where Cycles' does, within this many pixels.
 PEAKS = {"hdri": {"Sky": 2.0}}
@@ -603,4 +642,4 @@ SCENES = {"glass": glass, "principled_spheres": principled_spheres, "textured": 
           "coated": coated, "sheen": sheen, "leaf": leaf, "warm_light": warm_light, "soft_light": soft_light,
           "hdri": hdri, "ortho_camera": ortho_camera, "shifted_camera": shifted_camera,
           "panorama_camera": panorama_camera, "film_and_holdouts": film_and_holdouts,
-          "spot_light": spot_light, "soft_spot": soft_spot, "sky": sky}
+          "spot_light": spot_light, "soft_spot": soft_spot, "sky": sky, "lights_seen": lights_seen}

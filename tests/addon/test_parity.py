@@ -158,6 +158,9 @@ class Parity(unittest.TestCase):
     def test_film_and_holdouts(self):
         self.check("film_and_holdouts")
 
+    def test_lights_seen(self):
+        self.check("lights_seen")
+
     def test_soft_spot(self):
         self.check("soft_spot")
 

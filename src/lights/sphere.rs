@@ -1,0 +1,251 @@
+//! Point and spot lights as Blender has them: a sphere of `radius` (a point when it is 0) of the
+//! same radiance seen from every side, `I / (pi r^2)` for a radiant intensity `I`, shining into
+//! a beam (a spot's cone, with its falloff) or every way (a point light).
+//!
+//! As Cycles renders them, the sphere lights what is around it with soft shadows, is seen in
+//! reflections and, when the light is visible to the camera, by the camera; it casts no shadow and
+//! hides nothing behind it. A spot's falloff is taken along each ray's own direction, so the
+//! sphere softens the edge of the pool of light too.
+
+use glam::{Vec2, Vec3};
+use std::f32::consts::PI;
+
+use super::{direction_and_distance, EmittedPhoton, LightSample};
+use crate::geometry::{one_minus_cos_between, Cone};
+use crate::sampling::{basis, square_to_cone, square_to_disc};
+use crate::spectrum::{Illuminant, SampledSpectrum, Wavelengths};
+
+/// A point or spot light, with or without a radius.
+#[derive(Clone, Debug)]
+pub struct SphereLight {
+    /// Its centre.
+    pub position: Vec3,
+    /// Radiant intensity (on the axis, for a spot), W/sr.
+    pub intensity: Illuminant,
+    /// The radius of its sphere, or 0 for a point.
+    pub radius: f32,
+    /// A spot's beam; `None` for a point light, which shines every way.
+    pub beam: Option<Beam>,
+    /// Whether the camera sees the sphere (Blender's Ray Visibility > Camera); it is seen in
+    /// reflections either way.
+    pub seen_by_camera: bool,
+}
+
+/// The cone a spot light shines into.
+#[derive(Clone, Copy, Debug)]
+pub struct Beam {
+    /// Unit axis of the cone (the direction light travels).
+    pub axis: Vec3,
+    /// How it falls off toward the cone's edge.
+    pub falloff: SpotFalloff,
+    /// The outer cone (no light outside).
+    pub outer: Cone,
+}
+
+/// How a spot light dims toward the edge of its cone.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub enum SpotFalloff {
+    /// glTF's: the square of a linear ramp in cosine from the outer cone to this inner one.
+    Gltf {
+        /// The inner cone (full intensity inside).
+        inner: Cone,
+    },
+    /// Blender's Spot Blend, as Cycles renders it: a smoothstep in cosine over the last `blend`
+    /// of the cone's `1 - cos` (0: a hard edge).
+    Blender {
+        /// Blender's Spot Blend, in [0, 1].
+        blend: f32,
+    },
+}
+
+/// The spot falloff for a direction whose `1 - cos` from the axis is `one_minus_cos`.
+fn spot_falloff(one_minus_cos: f32, falloff: SpotFalloff, outer: Cone) -> f32 {
+    let width = match falloff {
+        SpotFalloff::Gltf { inner } => outer.one_minus_cos - inner.one_minus_cos,
+        SpotFalloff::Blender { blend } => outer.one_minus_cos * blend,
+    };
+    if width <= 0.0 {
+        return if one_minus_cos <= outer.one_minus_cos { 1.0 } else { 0.0 };
+    }
+    let t = ((outer.one_minus_cos - one_minus_cos) / width).clamp(0.0, 1.0);
+    match falloff {
+        SpotFalloff::Gltf { .. } => t * t,
+        SpotFalloff::Blender { .. } => t * t * (3.0 - 2.0 * t),
+    }
+}
+
+/// The cone of every direction.
+const EVERY_WAY: Cone = Cone { one_minus_cos: 2.0 };
+
+impl SphereLight {
+    /// The share of its intensity the light sends along the unit `direction` (the beam's falloff).
+    fn falloff(&self, direction: Vec3) -> f32 {
+        match self.beam {
+            Some(beam) => spot_falloff(one_minus_cos_between(direction, beam.axis), beam.falloff, beam.outer),
+            None => 1.0,
+        }
+    }
+
+    /// The cone it shines into, about its axis.
+    fn cone(&self) -> (Vec3, Cone) {
+        self.beam.map_or((Vec3::Z, EVERY_WAY), |beam| (beam.axis, beam.outer))
+    }
+
+    /// Total emitted luminous power (before the falloff).
+    pub fn power(&self) -> f64 {
+        f64::from(self.cone().1.solid_angle()) * self.intensity.luminance()
+    }
+
+    /// The cone of directions from `p` in which the sphere lies, toward its centre at
+    /// `distance` (its `1 - cos`); `None` for a point or from inside.
+    fn seen_from(&self, distance: f32) -> Option<Cone> {
+        if !(self.radius > 0.0 && distance > self.radius) {
+            return None;
+        }
+        let sin2_max = (self.radius / distance).powi(2);
+        Some(Cone { one_minus_cos: sin2_max / (1.0 + (1.0 - sin2_max).sqrt()) })
+    }
+
+    /// Samples light arriving at `p`: a direction uniform over the solid angle the sphere covers
+    /// (toward the centre for a point, or from inside the sphere).
+    pub fn sample_incident(&self, p: Vec3, u: Vec2, lambda: &Wavelengths) -> Option<LightSample> {
+        let (to_centre, centre_distance) = direction_and_distance(p, self.position)?;
+        let (wi, distance, radiance_over_pdf, pdf) = match self.seen_from(centre_distance) {
+            Some(cone) => {
+                let local = square_to_cone(u, cone.one_minus_cos);
+                let (t, b) = basis(to_centre);
+                let wi = (t * local.x + b * local.y + to_centre * local.z).normalize();
+                let along = centre_distance * local.z;
+                let chord = self.radius * self.radius - centre_distance * centre_distance * (1.0 - local.z * local.z);
+                let distance = along - chord.max(0.0).sqrt();
+                let solid_angle = cone.solid_angle();
+                (wi, distance, self.radiance(-wi, lambda) * solid_angle, 1.0 / solid_angle)
+            }
+            None => {
+                let falloff = self.falloff(-to_centre);
+                let radiance_over_pdf = self.intensity.eval(lambda) * (falloff / (centre_distance * centre_distance));
+                (to_centre, centre_distance, radiance_over_pdf, 0.0)
+            }
+        };
+        (radiance_over_pdf.max_element() > 0.0).then_some(LightSample { wi, distance, radiance_over_pdf, pdf })
+    }
+
+    /// The density per solid angle with which [`SphereLight::sample_incident`] picks a direction
+    /// from `p` that meets the sphere; zero for a point.
+    pub fn pdf_incident(&self, p: Vec3) -> f32 {
+        self.seen_from(p.distance(self.position)).map_or(0.0, |cone| 1.0 / cone.solid_angle())
+    }
+
+    /// The radiance its surface sends along the unit `direction`.
+    pub fn radiance(&self, direction: Vec3, lambda: &Wavelengths) -> SampledSpectrum {
+        self.intensity.eval(lambda) * (self.falloff(direction) / (PI * self.radius * self.radius))
+    }
+
+    /// The distance along the ray from `origin` along the unit `direction` to where it meets the
+    /// sphere, if it does before `t_max` from outside.
+    pub fn hit(&self, origin: Vec3, direction: Vec3, t_max: f32) -> Option<f32> {
+        let to_centre = self.position - origin;
+        let along = to_centre.dot(direction);
+        let gap2 = (to_centre - direction * along).length_squared();
+        let r2 = self.radius * self.radius;
+        if self.radius <= 0.0 || along <= 0.0 || gap2 >= r2 || to_centre.length_squared() <= r2 {
+            return None;
+        }
+        let t = along - (r2 - gap2).sqrt();
+        (t < t_max).then_some(t)
+    }
+
+    /// Samples a photon leaving the light: a direction within its cone, starting on the sphere's
+    /// surface at a uniform point of the disc it shows that way (the sphere emits the same
+    /// intensity every way, from its projected disc).
+    pub fn emit_photon(&self, u_position: Vec2, u_direction: Vec2, lambda: &Wavelengths) -> EmittedPhoton {
+        let (axis, cone) = self.cone();
+        let (t, b) = basis(axis);
+        let local = square_to_cone(u_direction, cone.one_minus_cos);
+        let direction = (t * local.x + b * local.y + axis * local.z).normalize();
+        let falloff = spot_falloff(u_direction.x * cone.one_minus_cos, self.beam_falloff(), cone);
+        EmittedPhoton {
+            origin: self.position + self.point_facing(direction, u_position),
+            direction,
+            flux: self.intensity.eval(lambda) * (falloff * cone.solid_angle()),
+        }
+    }
+
+    /// The beam's falloff law (a hard edge at every direction for a point light).
+    fn beam_falloff(&self) -> SpotFalloff {
+        self.beam.map_or(SpotFalloff::Blender { blend: 0.0 }, |beam| beam.falloff)
+    }
+
+    /// Where on the sphere, about its centre, a photon leaving along `direction` starts.
+    fn point_facing(&self, direction: Vec3, u: Vec2) -> Vec3 {
+        if self.radius <= 0.0 {
+            return Vec3::ZERO;
+        }
+        let (t, b) = basis(direction);
+        let d = square_to_disc(u);
+        self.radius * (t * d.x + b * d.y + direction * (1.0 - d.length_squared()).max(0.0).sqrt())
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn blenders_spot_blend_is_a_smoothstep_over_the_cones_last_share() {
+        let outer = Cone::from_half_angle(0.6);
+        let blender = SpotFalloff::Blender { blend: 0.5 };
+        let at = |share: f32| spot_falloff(outer.one_minus_cos * share, blender, outer);
+        assert_eq!(at(1.01), 0.0);
+        assert_eq!(at(0.4), 1.0);
+        // Halfway through the blended last half of 1 - cos: smoothstep(0.5) = 0.5; a quarter: 0.15625.
+        assert!((at(0.75) - 0.5).abs() < 1e-5, "{}", at(0.75));
+        assert!((at(0.875) - 0.15625).abs() < 1e-5, "{}", at(0.875));
+        assert_eq!(spot_falloff(outer.one_minus_cos * 0.99, SpotFalloff::Blender { blend: 0.0 }, outer), 1.0);
+    }
+
+    fn ball(radius: f32) -> SphereLight {
+        SphereLight {
+            position: Vec3::new(0.0, 0.0, 3.0),
+            intensity: Illuminant::d65(Vec3::ONE),
+            radius,
+            beam: None,
+            seen_by_camera: true,
+        }
+    }
+
+    #[test]
+    fn a_sphere_lights_a_point_outside_it_as_a_point_of_its_intensity_does() {
+        // Irradiance from a uniform sphere on a plane facing it is I / d^2 (Nusselt), whatever its
+        // radius; the samples' directions all meet the sphere at the distance they report.
+        let lambda = Wavelengths::single(555.0, 1.0);
+        let expected = crate::spectrum::d65(555.0) / 9.0;
+        for radius in [0.0, 0.5, 2.0] {
+            let light = ball(radius);
+            let n = 200;
+            let mut irradiance = 0.0;
+            for i in 0..n * n {
+                let u = Vec2::new(((i % n) as f32 + 0.5) / n as f32, ((i / n) as f32 + 0.5) / n as f32);
+                let s = light.sample_incident(Vec3::ZERO, u, &lambda).unwrap();
+                irradiance += s.radiance_over_pdf.x * s.wi.z / (n * n) as f32;
+                if radius > 0.0 {
+                    let t = light.hit(Vec3::ZERO, s.wi, f32::INFINITY).unwrap();
+                    assert!((t - s.distance).abs() < 1e-3 * s.distance, "{t} vs {}", s.distance);
+                    assert!((s.pdf - light.pdf_incident(Vec3::ZERO)).abs() < 1e-6 * s.pdf);
+                }
+            }
+            assert!((irradiance / expected - 1.0).abs() < 2e-3, "radius {radius}: {irradiance} vs {expected}");
+        }
+    }
+
+    #[test]
+    fn rays_meet_the_sphere_only_from_outside_and_before_their_end() {
+        let light = ball(1.0);
+        assert_eq!(light.hit(Vec3::ZERO, Vec3::Z, f32::INFINITY), Some(2.0));
+        assert_eq!(light.hit(Vec3::ZERO, Vec3::Z, 1.5), None);
+        assert_eq!(light.hit(Vec3::ZERO, -Vec3::Z, f32::INFINITY), None);
+        assert_eq!(light.hit(Vec3::new(0.0, 0.0, 3.5), Vec3::Z, f32::INFINITY), None);
+        assert_eq!(light.hit(Vec3::new(1.5, 0.0, 0.0), Vec3::Z, f32::INFINITY), None);
+        assert_eq!(ball(0.0).hit(Vec3::ZERO, Vec3::Z, f32::INFINITY), None);
+    }
+}
