@@ -279,10 +279,12 @@ def fit_orthographic(gltf_camera, camera, scene):
 
 
 def area_light_extras(light):
-    """A Blender area light: shape, size, power (W) and colour."""
+    """A Blender area light: shape, size, power (W), colour and spread."""
     extras = {"shape": light.shape, "size": light.size, "power": light.energy, "color": list(light.color)}
     if light.shape in ('RECTANGLE', 'ELLIPSE'):
         extras["size_y"] = light.size_y
+    if light.spread < math.pi:
+        extras["spread_deg"] = math.degrees(light.spread)
     return extras
 
 
@@ -303,7 +305,7 @@ def holdout_objects(view_layer):
 
 def node_extras(blender_object):
     """What the exporter drops from an object: area lights, the sun's angle, a point or spot
-    light's radius, a light's colour temperature and whether the camera sees it, the camera's
+    light's radius and Soft Falloff, a light's colour temperature and whether the camera sees it, the camera's
     lens, shift and panorama."""
     if blender_object.type == 'LIGHT':
         light = blender_object.data
@@ -314,6 +316,8 @@ def node_extras(blender_object):
             extras["sun_angle_deg"] = math.degrees(light.angle)
         if light.type in ('POINT', 'SPOT') and light.shadow_soft_size > 0:
             extras["radius"] = light.shadow_soft_size
+            if getattr(light, "use_soft_falloff", False):
+                extras["soft_falloff"] = True
         if light.type == 'SPOT':
             extras["spot_blend"] = light.spot_blend
         if not blender_object.visible_camera:
@@ -450,6 +454,9 @@ SUPPORTED_INPUTS = {"Base Color", "Metallic", "Roughness", "IOR", "Transmission 
                     "Emission Strength", "Specular IOR Level"}
 
 # Inputs that change the look when set away from these values, and that Caustic ignores.
+# The narrowest area-light Spread Caustic renders (radians; the renderer's NARROWEST_SPREAD).
+NARROWEST_SPREAD = math.radians(1.0)
+
 IGNORED_INPUTS = {"Subsurface Weight": 0.0, "Anisotropic": 0.0, "Thin Film Thickness": 0.0}
 
 
@@ -528,12 +535,8 @@ def scene_warnings(depsgraph):
     warnings = [w for m in sorted(materials, key=lambda m: m.name) for w in material_warnings(m)]
     warnings += camera_warnings(depsgraph.scene)
     for light in {obj.data for obj in depsgraph.scene.objects if obj.type == 'LIGHT'}:
-        if light.type == 'AREA' and light.spread < math.pi - 1e-4:
-            warnings.append(f"light '{light.name}': an area light's Spread is not rendered; it spreads over 180 "
-                            "degrees")
-        if light.type in ('POINT', 'SPOT') and light.shadow_soft_size > 0 and getattr(light, "use_soft_falloff", False):
-            warnings.append(f"light '{light.name}': Soft Falloff is not rendered: the light is a sphere, which lights "
-                            "surfaces within a few radii of it more than Blender's falloff does")
+        if light.type == 'AREA' and light.spread < NARROWEST_SPREAD:
+            warnings.append(f"light '{light.name}': a Spread under 1 degree is rendered as 1 degree")
     return warnings
 
 

@@ -152,7 +152,8 @@ fn volume_seed() -> Value {
 /// A scene with every camera input Caustic reads (an orthographic camera, a shifted perspective
 /// one with a lens, and a panorama on a node of its own, which the scene's extras choose) and the
 /// film's and lights' newer ones (a transparent film, a holdout, a spot with Blender's blend and a
-/// radius).
+/// radius hidden from the camera, a point light with a radius and Soft Falloff seen by it, an area
+/// light with a spread).
 fn camera_seed() -> Value {
     let mut gltf = common::GltfBuilder::default();
     let grey = gltf.material(common::diffuse([0.5, 0.5, 0.5]));
@@ -162,7 +163,18 @@ fn camera_seed() -> Value {
     let spot =
         json!({"type": "spot", "intensity": 500.0, "spot": {"innerConeAngle": 0.2, "outerConeAngle": 0.5}});
     gltf.light(spot, [0.0, 2.0, -3.0], [0.0, -1.0, 0.0]);
-    gltf.set_node_extras(gltf.last_node(), json!({"spot_blend": 0.4, "radius": 0.2}));
+    gltf.set_node_extras(
+        gltf.last_node(),
+        json!({"spot_blend": 0.4, "radius": 0.2, "visible_to_camera": false}),
+    );
+    gltf.light(json!({"type": "point", "intensity": 300.0}), [0.5, 0.5, -2.0], [0.0, -1.0, 0.0]);
+    gltf.set_node_extras(
+        gltf.last_node(),
+        json!({"radius": 0.1, "visible_to_camera": true, "soft_falloff": true}),
+    );
+    let soft_box = json!({"area_light": {"shape": "RECTANGLE", "size": 0.5, "size_y": 0.3, "power": 50.0,
+        "spread_deg": 40.0}, "visible_to_camera": false});
+    gltf.extras_node("Soft box", soft_box, [0.0, 1.5, -2.5], [0.0, -1.0, 0.0]);
     let ortho = json!({"type": "orthographic", "orthographic": {"xmag": 2.0, "ymag": 1.5, "znear": 0.01, "zfar": 50.0}});
     gltf.camera_of(ortho, [0.0, 0.0, 2.0], [0.0, 0.0, -1.0]);
     gltf.camera([0.0, 1.0, 2.0], [0.0, -0.3, -1.0], 0.7);

@@ -379,6 +379,15 @@ fn impossible_cameras_are_refused() {
         &spot,
         &["node 'Enclosure'", "`caustic.spot_blend`: expected a blend from 0 to 1, got 1.5"],
     );
+    let seen = furnace_edited(dir.path(), "seen.gltf", |doc| {
+        doc["nodes"][0]["extras"] = json!({"caustic": {"visible_to_camera": "yes"}});
+    });
+    assert_refused(&seen, &["visible_to_camera", "expected a boolean"]);
+    let spread = furnace_edited(dir.path(), "spread.gltf", |doc| {
+        let area = json!({"shape": "SQUARE", "size": 1.0, "power": 10.0, "spread_deg": 270.0});
+        doc["nodes"][0]["extras"] = json!({"caustic": {"area_light": area}});
+    });
+    assert_refused(&spread, &["node 'Enclosure' area light", "expected a spread_deg from 0 to 180, got 270"]);
 }
 
 /// Hostile texture references and attributes render with a warning naming the material or mesh:

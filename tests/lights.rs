@@ -42,7 +42,8 @@ fn point_light_intensity_is_candela_over_683() {
 /// The same point light with a radius of 0.3 (a sphere of light, Blender's radius in the
 /// extras) emits the same power: the ground under it receives the same irradiance (a sphere
 /// wholly above a point lights it as its centre would), and the camera sees the sphere's
-/// radiance I / (pi r^2) where it looks at it. A spot light's radius is named in a warning.
+/// radiance I / (pi r^2) where it looks at it. A sun's
+/// radius is named in a warning.
 #[test]
 fn a_point_light_with_a_radius_is_a_sphere_of_the_same_power() {
     let dir = tempfile::tempdir().unwrap();
@@ -54,7 +55,7 @@ fn a_point_light_with_a_radius_is_a_sphere_of_the_same_power() {
     let path = dir.path().join("sphere.gltf");
     std::fs::write(&path, doc.to_string()).unwrap();
     assert_near(mean_luminance(&path, dir.path()), 1.0, "under a sphere light");
-    // Seen from below, straight up into it: radiance 4 pi / (pi 0.3^2) over its (tessellated) disc.
+    // Seen from below, straight up into it: radiance 4 pi / (pi 0.3^2) over its disc.
     doc["nodes"].as_array_mut().unwrap().iter_mut().filter(|n| n.get("camera").is_some()).for_each(|n| {
         n["rotation"] = json!([std::f32::consts::FRAC_1_SQRT_2, 0.0, 0.0, std::f32::consts::FRAC_1_SQRT_2]);
     });
@@ -130,6 +131,31 @@ fn area_light_power_is_watts() {
     let area = json!({"area_light": {"shape": "SQUARE", "size": 0.1, "power": 4.0 * PI * PI}});
     let gltf = ground_scene(|g| g.extras_node("Area", area, [0.0, 2.0, 0.0], [0.0, -1.0, 0.0]));
     assert_near(mean_luminance(&gltf.write(dir.path(), "area"), dir.path()), 1.0, "area light");
+}
+
+/// Blender's Spread narrows an area light into a beam that keeps its power (Cycles' soft-box
+/// model): a small light (0.02 wide, so that what the camera sees lies within 0.7 degrees of its
+/// axis) 2 above the ground, of the power of `area_light_power_is_watts`, with a spread of 120
+/// degrees lights the ground straight under it tan(60) / (tan(60) - pi / 3) times as brightly,
+/// and ground 63 degrees off its axis not at all.
+#[test]
+fn an_area_lights_spread_narrows_it_into_a_beam_of_the_same_power() {
+    let dir = tempfile::tempdir().unwrap();
+    let lit = |name: &str, at: [f32; 3], spread_deg: f32| {
+        let area = json!({"area_light": {"shape": "SQUARE", "size": 0.02, "power": 4.0 * PI * PI,
+            "spread_deg": spread_deg}});
+        let gltf = ground_scene(|g| g.extras_node("Area", area, at, [0.0, -1.0, 0.0]));
+        mean_luminance(&gltf.write(dir.path(), name), dir.path())
+    };
+    let half = 60f32.to_radians();
+    assert_near(
+        lit("beam", [0.0, 2.0, 0.0], 120.0),
+        f64::from(half.tan() / (half.tan() - half)),
+        "under the beam",
+    );
+    assert_near(lit("wide", [0.0, 2.0, 0.0], 180.0), 1.0, "under a light of spread 180");
+    let beside = lit("beside", [4.0, 2.0, 0.0], 120.0);
+    assert!(beside == 0.0, "63 degrees off the beam's axis: {beside}");
 }
 
 /// Area lights are not surfaces, as in Blender: a wide one hung between the light above and the

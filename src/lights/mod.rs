@@ -14,7 +14,7 @@
 mod sphere;
 mod world;
 
-pub use sphere::{Beam, SphereLight, SpotFalloff};
+pub use sphere::{Beam, SoftFalloff, SphereLight, SpotFalloff};
 pub use world::World;
 
 use glam::{Vec2, Vec3, Vec3A};
@@ -22,7 +22,7 @@ use std::f32::consts::PI;
 use std::sync::Arc;
 
 use crate::geometry::{corners_scale, offset_origin, Cone};
-use crate::materials::{Alpha, SurfaceInputs};
+use crate::materials::{Alpha, Spread, SurfaceInputs};
 use crate::sampling::{
     basis, square_to_cone, square_to_cosine_hemisphere, square_to_disc, square_to_triangle,
 };
@@ -154,6 +154,8 @@ pub struct EmittingTriangle {
     emission: Emission,
     /// Whether both faces emit (meshes) or only the front (area lights).
     both_sides: bool,
+    /// How an area light's Spread narrows what its front emits.
+    spread: Option<Spread>,
     /// Its unit normal (corners counter-clockwise), zero when degenerate.
     normal: Vec3,
     /// Its area.
@@ -171,10 +173,16 @@ impl EmittingTriangle {
             corners,
             emission,
             both_sides,
+            spread: None,
             normal: cross.normalize_or_zero(),
             area: 0.5 * cross.length(),
             scale: corners_scale(corners.map(Vec3A::from)),
         }
+    }
+
+    /// The same triangle with an area light's `spread`.
+    pub fn with_spread(self, spread: Option<Spread>) -> Self {
+        EmittingTriangle { spread, ..self }
     }
 
     /// Faces that emit: 1 or 2.
@@ -226,6 +234,15 @@ fn disc_origin(sphere: &BoundingSphere, direction: Vec3, u: Vec2) -> Vec3 {
 }
 
 impl Light {
+    /// For photons from a light with Soft Falloff: its factor on their flux where they first
+    /// meet a surface.
+    pub fn photon_falloff(&self) -> Option<SoftFalloff> {
+        match self {
+            Light::Sphere(sphere) => sphere.photon_falloff(),
+            _ => None,
+        }
+    }
+
     /// Where it is, for finding the volumes its photons start in: a point light's position, a
     /// triangle's centroid; `None` for lights at infinity.
     pub fn centre(&self) -> Option<Vec3> {
@@ -279,7 +296,10 @@ impl Light {
                 if pdf <= 0.0 {
                     return None;
                 }
-                let radiance_over_pdf = triangle.emission.at(b, lambda) / pdf;
+                let mut radiance_over_pdf = triangle.emission.at(b, lambda) / pdf;
+                if let Some(spread) = triangle.spread {
+                    radiance_over_pdf *= spread.attenuation(-triangle.normal.dot(wi));
+                }
                 Some(LightSample { wi, distance, radiance_over_pdf, pdf })
             }
             Light::World(world) => {
@@ -307,7 +327,7 @@ impl Light {
                 1.0 / disc.solid_angle()
             }
             Light::World(world) => world.pdf(wi),
-            Light::Sphere(sphere) => sphere.pdf_incident(p),
+            Light::Sphere(sphere) => sphere.pdf_incident(p, wi, q),
             _ => 0.0,
         }
     }
@@ -358,13 +378,16 @@ impl Light {
                 }
                 let (q, b) = triangle.point(u_position);
                 let (t, bitangent) = basis(n);
-                let local = square_to_cosine_hemisphere(u);
+                let (local, weight) = match triangle.spread {
+                    Some(spread) => spread.sample(u),
+                    None => (square_to_cosine_hemisphere(u), 1.0),
+                };
                 // Unit to rounding (an orthonormal basis, a unit local direction).
                 let direction = t * local.x + bitangent * local.y + n * local.z;
                 EmittedPhoton {
                     origin: offset_origin(q, n, direction, triangle.scale),
                     direction,
-                    flux: triangle.emission.at(b, lambda) * PI * triangle.area * triangle.sides(),
+                    flux: triangle.emission.at(b, lambda) * (PI * triangle.area * triangle.sides() * weight),
                 }
             }
             Light::World(world) => {

@@ -17,6 +17,7 @@ use super::layering::{self, Choice, Over};
 use super::normal_map::NormalMap;
 use super::plastic::{self, Coat, Plastic};
 use super::sheen::Sheen;
+use super::spread::Spread;
 use super::volume::Volume;
 use super::{Bsdf, ShadingFrame, NARROW_COAT_ALPHA};
 use crate::spectrum::{Dispersion, Illuminant, RgbSpectrum, SampledSpectrum, Wavelengths};
@@ -64,6 +65,8 @@ pub struct Material {
     pub emission_texture: Option<Arc<Texture>>,
     /// Whether emission leaves both faces (meshes) or only the front (area lights).
     pub emits_both_sides: bool,
+    /// How an area light's Spread narrows what its front emits (`None`: a cosine law).
+    pub emission_spread: Option<Spread>,
     /// Transmission through a thin wall (an open mesh: a window pane modelled as a plane) rather
     /// than into a solid: glTF's reading of transmission without a volume.
     pub thin: bool,
@@ -86,6 +89,9 @@ pub struct Material {
     /// Whether the camera sees its emission (false for a light Blender hides from the camera;
     /// reflections see it either way).
     pub seen_by_camera: bool,
+    /// An area light's surface: every ray passes through it unchanged, as through a surface
+    /// alpha cuts away (Blender's lights cast no shadow and hide nothing behind them).
+    pub light_surface: bool,
 }
 
 /// What a path meets at a surface point: a BSDF in its frame, and the factor on the path's
@@ -225,6 +231,7 @@ impl Material {
             emission: None,
             emission_texture: None,
             emits_both_sides: true,
+            emission_spread: None,
             thin: false,
             alpha: Alpha::Opaque,
             clearcoat: None,
@@ -233,6 +240,7 @@ impl Material {
             priority: 0,
             holdout: false,
             seen_by_camera: true,
+            light_surface: false,
         }
     }
 
@@ -281,6 +289,10 @@ impl Material {
             (Some(spectrum), None) => spectrum.eval(lambda),
             (None, _) => Vec4::ZERO,
         };
+        let radiance = match self.emission_spread {
+            Some(spread) => radiance * spread.attenuation(ng.dot(wo)),
+            None => radiance,
+        };
         if self.alpha.cuts() {
             radiance * self.alpha.opacity(inputs)
         } else {
@@ -310,10 +322,10 @@ impl Material {
         self.transmission > 0.0 && !self.thin
     }
 
-    /// Whether light passes through unchanged (a thin fully transmissive wall of index 1, as area
-    /// lights are): such surfaces cast no shadow.
+    /// Whether light passes through unchanged (an area light's surface): such surfaces cast no
+    /// shadow.
     pub fn is_invisible(&self) -> bool {
-        self.thin && self.transmission >= 1.0 && self.ior == Dispersion::Constant(1.0)
+        self.light_surface
     }
 
     /// What a path arriving from `wo` meets at a surface point whose interpolated frame is
@@ -367,7 +379,7 @@ impl Material {
         lambda: &Wavelengths,
         u_lobe: f32,
     ) -> Lobe {
-        let Some(mut u) = self.alpha_remainder(inputs, u_lobe) else {
+        let Some(mut u) = self.alpha_remainder(inputs, u_lobe).filter(|_| !self.light_surface) else {
             return Lobe { frame, bsdf: Bsdf::PassThrough, weight: 1.0, over: [None; 2] };
         };
         let (mut weight, mut over) = (1.0, [None; 2]);

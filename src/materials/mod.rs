@@ -26,6 +26,7 @@ mod plastic;
 mod rough_dielectric;
 mod rough_thin_dielectric;
 mod sheen;
+mod spread;
 mod volume;
 
 use glam::{Vec2, Vec3, Vec3A, Vec4};
@@ -42,6 +43,7 @@ pub use plastic::{Coat, Plastic};
 pub use rough_dielectric::RoughDielectric;
 pub use rough_thin_dielectric::RoughThinDielectric;
 pub use sheen::Sheen;
+pub use spread::Spread;
 pub use volume::{transmittance, Volume};
 
 /// Specular layers narrower than this GGX alpha (roughness 0.316) are not gathered at: eye paths

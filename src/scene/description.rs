@@ -10,7 +10,7 @@ use super::TriangleRef;
 pub use crate::camera::Lens;
 use crate::camera::Projection;
 use crate::geometry::Cone;
-use crate::lights::{SpotFalloff, World};
+use crate::lights::{SphereLight, World};
 use crate::materials::Material;
 use crate::spectrum::Illuminant;
 
@@ -36,17 +36,8 @@ pub struct MeshInstance {
 /// A punctual light's kind and emission (see `crate::lights` for units).
 #[derive(Clone, Debug)]
 pub enum PunctualKind {
-    /// A point or spot light (posed as a [`crate::lights::SphereLight`]).
-    Sphere {
-        /// Radiant intensity (on the axis, for a spot), W/sr.
-        intensity: Illuminant,
-        /// Its radius (0 for a point).
-        radius: f32,
-        /// A spot's falloff and outer cone; `None` for a point light.
-        beam: Option<(SpotFalloff, Cone)>,
-        /// Whether the camera sees its sphere.
-        seen_by_camera: bool,
-    },
+    /// A point or spot light, at the origin shining down -z (its node's pose places it).
+    Sphere(SphereLight),
     /// Irradiance, W/m^2, and the sun's disc.
     Sun(Illuminant, Cone),
 }

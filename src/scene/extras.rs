@@ -129,6 +129,10 @@ pub struct NodeExtras {
     /// Whether the camera sees the node's light (a point or spot light's sphere, an area
     /// light): Blender's Ray Visibility > Camera. Reflections see it either way. Default: true.
     pub visible_to_camera: Option<bool>,
+    /// Blender's Soft Falloff of the node's point or spot light with a radius: the light is a
+    /// disc facing what it lights (`crate::lights::SphereLight`).
+    #[serde(default)]
+    pub soft_falloff: bool,
     /// The colour temperature of the node's light, kelvin (Blender's `use_temperature`): its
     /// colour is multiplied by a black body's.
     pub temperature_k: Option<f32>,
@@ -207,6 +211,8 @@ pub struct AreaLightExtras {
     /// Linear Rec.709 colour (default white).
     #[serde(default = "white")]
     pub color: [f32; 3],
+    /// Blender's Spread, degrees in [0, 180] (default 180: no narrowing).
+    pub spread_deg: Option<f32>,
 }
 
 fn white() -> [f32; 3] {
@@ -217,7 +223,8 @@ fn one() -> f32 {
     1.0
 }
 
-/// The `caustic` entry of raw glTF extras, or the default when absent.
+/// The `caustic` entry of raw glTF extras, or the default when absent. An error names the
+/// field within the entry (`visible_to_camera: invalid type: ...`).
 pub fn parse<T: Default + for<'a> Deserialize<'a>>(extras: &gltf::json::Extras) -> Result<T, String> {
     let Some(raw) = extras else {
         return Ok(T::default());
@@ -226,6 +233,14 @@ pub fn parse<T: Default + for<'a> Deserialize<'a>>(extras: &gltf::json::Extras) 
     struct Wrapper<T> {
         caustic: Option<T>,
     }
-    let wrapper: Wrapper<T> = serde_json::from_str(raw.get()).map_err(|e| e.to_string())?;
+    let mut json = serde_json::Deserializer::from_str(raw.get());
+    let wrapper: Wrapper<T> = serde_path_to_error::deserialize(&mut json).map_err(|e| {
+        let field = e.path().to_string();
+        let field = field.strip_prefix("caustic").unwrap_or(&field).trim_start_matches('.');
+        match field {
+            "" => e.inner().to_string(),
+            field => format!("`{field}`: {}", e.inner()),
+        }
+    })?;
     Ok(wrapper.caustic.unwrap_or_default())
 }

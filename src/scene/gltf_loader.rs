@@ -27,9 +27,9 @@ use super::gltf_materials::material;
 use super::{shapes, tangents, SceneError, TriangleRef, VertexExtras};
 use crate::camera::Projection;
 use crate::geometry::Cone;
-use crate::lights::{SpotFalloff, World};
-use crate::materials::{BaseColour, Material};
-use crate::spectrum::{Dispersion, Illuminant, RgbSpectrum};
+use crate::lights::{Beam, SphereLight, SpotFalloff, World};
+use crate::materials::{BaseColour, Material, Spread};
+use crate::spectrum::{Illuminant, RgbSpectrum};
 
 /// glTF photometric units to watts: Blender writes W * 683 / (4 pi) candela and W/m^2 * 683 lux.
 const LUMENS_PER_WATT: f32 = 683.0;
@@ -431,11 +431,15 @@ impl Builder<'_> {
     ) {
         let colour = Vec3::from(light.color()) * light.intensity() / LUMENS_PER_WATT;
         let spectrum = Illuminant::new(colour, kelvin);
-        let sphere = |beam| PunctualKind::Sphere {
-            intensity: spectrum,
-            radius: extras.radius.unwrap_or(0.0),
-            beam,
-            seen_by_camera: extras.visible_to_camera.unwrap_or(true),
+        let sphere = |beam| {
+            PunctualKind::Sphere(SphereLight {
+                position: Vec3::ZERO,
+                intensity: spectrum,
+                radius: extras.radius.unwrap_or(0.0),
+                beam,
+                seen_by_camera: extras.visible_to_camera.unwrap_or(true),
+                soft_falloff: extras.soft_falloff,
+            })
         };
         let kind = match light.kind() {
             Kind::Point => sphere(None),
@@ -444,7 +448,7 @@ impl Builder<'_> {
                     Some(blend) => SpotFalloff::Blender { blend },
                     None => SpotFalloff::Gltf { inner: Cone::from_half_angle(inner_cone_angle) },
                 };
-                sphere(Some((falloff, Cone::from_half_angle(outer_cone_angle))))
+                sphere(Some(Beam { axis: -Vec3::Z, falloff, outer: Cone::from_half_angle(outer_cone_angle) }))
             }
             Kind::Directional => PunctualKind::Sun(spectrum, sun_disc(extras)),
         };
@@ -452,14 +456,25 @@ impl Builder<'_> {
     }
 
     /// An area light becomes one-sided emitting triangles with radiance P / (pi A), A its area
-    /// at the scene's rest pose, that every ray passes through unchanged (a thin wall of index 1),
-    /// as Blender's lights do: they cast no shadow and hide nothing behind them.
-    fn add_area_light(&mut self, extras: &NodeExtras, node: usize, name: &str, rig: &Rig) -> Result<(), String> {
+    /// at the scene's rest pose, that every ray passes through unchanged, as Blender's lights do: they cast no shadow and hide nothing behind them.
+    fn add_area_light(
+        &mut self,
+        extras: &NodeExtras,
+        node: usize,
+        name: &str,
+        rig: &Rig,
+    ) -> Result<(), String> {
         let Some(area) = &extras.area_light else {
             return Ok(());
         };
         if !(area.size > 0.0 && area.power >= 0.0 && area.size.is_finite() && area.power.is_finite()) {
             return Err(format!("node '{name}' area light: size must be positive and power non-negative"));
+        }
+        let spread = area.spread_deg.unwrap_or(180.0);
+        if !(0.0..=180.0).contains(&spread) {
+            return Err(format!(
+                "node '{name}' area light: expected a spread_deg from 0 to 180, got {spread}"
+            ));
         }
         let local = shapes::area_light_triangles(area);
         let area_m2 = world_area(&local, rig, node);
@@ -469,9 +484,8 @@ impl Builder<'_> {
             base_colour: BaseColour::Constant(RgbSpectrum::constant(0.0)),
             emission: Some(Illuminant::new(colour, light_temperature(extras, name)?)),
             emits_both_sides: false,
-            transmission: 1.0,
-            ior: Dispersion::Constant(1.0),
-            thin: true,
+            emission_spread: Spread::new(spread.to_radians()),
+            light_surface: true,
             seen_by_camera: extras.visible_to_camera.unwrap_or(true),
             ..Material::default_grey()
         };

@@ -93,9 +93,11 @@ pub fn material(
         emission_texture,
         emission: (emission.max_element() > 0.0).then(|| Illuminant::d65(emission)),
         emits_both_sides: true,
+        emission_spread: None,
         thin: false,
         holdout: false,
         seen_by_camera: true,
+        light_surface: false,
     })
 }
 

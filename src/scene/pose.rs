@@ -15,7 +15,9 @@ use super::{
 };
 use crate::accel::Bvh;
 use crate::camera::Camera;
-use crate::lights::{Beam, BoundingSphere, CutEmission, Emission, EmittingTriangle, Light, SphereLight, TexturedEmission};
+use crate::lights::{
+    Beam, BoundingSphere, CutEmission, Emission, EmittingTriangle, Light, SphereLight, TexturedEmission,
+};
 use crate::materials::Material;
 
 /// A span of glTF time, in seconds, that a render covers (frames and their shutters).
@@ -92,7 +94,8 @@ fn triangle_lights(
         let material = &materials[t.material as usize];
         if let Some(emission) = emission(geometry, t, material) {
             of_triangle[i] = (first_light + lights.len()) as u32;
-            lights.push(Light::Triangle(EmittingTriangle::new(corners, emission, material.emits_both_sides)));
+            let triangle = EmittingTriangle::new(corners, emission, material.emits_both_sides);
+            lights.push(Light::Triangle(triangle.with_spread(material.emission_spread)));
         }
     }
     (lights, of_triangle)
@@ -126,12 +129,10 @@ fn punctual(light: &PunctualLight, world: Mat4) -> Light {
     let position = world.transform_point3(Vec3::ZERO);
     let axis = world.transform_vector3(-Vec3::Z).normalize();
     match &light.kind {
-        PunctualKind::Sphere { intensity, radius, beam, seen_by_camera } => Light::Sphere(SphereLight {
+        PunctualKind::Sphere(sphere) => Light::Sphere(SphereLight {
             position,
-            intensity: *intensity,
-            radius: *radius,
-            beam: beam.map(|(falloff, outer)| Beam { axis, falloff, outer }),
-            seen_by_camera: *seen_by_camera,
+            beam: sphere.beam.map(|beam| Beam { axis, ..beam }),
+            ..sphere.clone()
         }),
         PunctualKind::Sun(irradiance, disc) => {
             Light::Sun { direction: axis, irradiance: *irradiance, disc: *disc, sphere: Default::default() }
@@ -281,8 +282,11 @@ impl Prepared {
                 }
             }
         }
-        let sphere_lights =
-            lights.iter().enumerate().filter(|(_, l)| matches!(l, Light::Sphere(s) if s.radius > 0.0)).map(|(i, _)| i);
+        let sphere_lights = lights
+            .iter()
+            .enumerate()
+            .filter(|(_, l)| matches!(l, Light::Sphere(s) if s.radius > 0.0))
+            .map(|(i, _)| i);
         let sphere_lights = sphere_lights.collect();
         if let Some(world) = &d.world {
             let mut world = world.clone();

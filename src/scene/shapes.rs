@@ -38,7 +38,14 @@ mod tests {
     #[test]
     fn area_lights_face_down_their_local_z() {
         for shape in [AreaShape::Square, AreaShape::Rectangle, AreaShape::Disk, AreaShape::Ellipse] {
-            let light = AreaLightExtras { shape, size: 2.0, size_y: Some(1.0), power: 1.0, color: [1.0; 3] };
+            let light = AreaLightExtras {
+                shape,
+                size: 2.0,
+                size_y: Some(1.0),
+                power: 1.0,
+                color: [1.0; 3],
+                spread_deg: None,
+            };
             let triangles = area_light_triangles(&light);
             let mut area = 0.0;
             for [a, b, c] in triangles {

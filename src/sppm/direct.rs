@@ -161,7 +161,7 @@ impl DirectLight<'_> {
         let (spheres, reach) = scene.spheres_met(origin, sample.wi, t_max).fold(
             (SampledSpectrum::ZERO, 0.0f32),
             |(sum, reach), (i, sphere, t)| {
-                let weight = power_heuristic(sample.pdf, light_pdf(i, Vec3::ZERO)) * through;
+                let weight = power_heuristic(sample.pdf, light_pdf(i, origin + sample.wi * t)) * through;
                 let radiance = sphere.radiance(-sample.wi, wavelengths) * self.kept(sample.wi, t);
                 (sum + sample.weight * radiance * weight, reach.max(t))
             },

@@ -13,6 +13,7 @@ use rayon::prelude::*;
 use super::media::Media;
 use super::renderer::{PassSamples, PassStats, Renderer, MAX_DEPTH};
 use crate::geometry::offset_origin;
+use crate::lights::SoftFalloff;
 use crate::materials::{Bsdf, Transport};
 use crate::sampling::{stream, Sampler, Stream};
 use crate::spectrum::{hero_only, SampledSpectrum, LANES};
@@ -51,6 +52,8 @@ pub struct PhotonState {
     /// It has scattered off a surface (not only passed where alpha cuts one away): from here on
     /// it is not direct light, and is stored.
     pub scattered: bool,
+    /// Its light's Soft Falloff, until the path first meets a surface.
+    pub soft_falloff: Option<SoftFalloff>,
     /// The path's random stream, where this segment leaves it.
     pub rng: Sampler,
 }
@@ -80,6 +83,7 @@ pub fn start_photon(renderer: &Renderer, pass: &PassSamples, k: u64) -> Option<(
         media: renderer.light_media(index),
         depth: 0,
         scattered: false,
+        soft_falloff: renderer.scene.lights[index].photon_falloff(),
         rng,
     };
     Some((state, index))
@@ -128,6 +132,11 @@ pub fn continue_photon(
         let lobe = material.lobe(&surface.inputs, surface.frame, wo, &pass.wavelengths, rng.next_1d());
         let (frame, bsdf) = (lobe.frame, &lobe.bsdf);
         let lands = bsdf.is_gathered_at() || (*bsdf != Bsdf::PassThrough && material.gathers_photons());
+        if *bsdf != Bsdf::PassThrough {
+            if let Some(soft) = state.soft_falloff.take() {
+                state.flux *= soft.at(surface.p);
+            }
+        }
         if state.scattered && lands {
             let ng = if surface.frame.ng().dot(wo) < 0.0 { -surface.frame.ng() } else { surface.frame.ng() };
             out.push(Photon {

@@ -28,10 +28,10 @@ use glam::{Vec2, Vec3, Vec3A};
 use super::direct::{DirectLight, DirectTerm, ShadowRay};
 use super::media::Media;
 use super::renderer::{PassSamples, PassStats, Renderer, VisiblePoint, MAX_DEPTH};
+use crate::accel::Hit;
 use crate::geometry::offset_origin;
 use crate::materials::{Bsdf, Lobe, Transport};
 use crate::sampling::{pixel_stream, PixelSampler};
-use crate::accel::Hit;
 use crate::spectrum::{hero_only, SampledSpectrum, Wavelengths};
 
 /// A pixel's eye path: the radiance found along it, and its visible point if it has one.
@@ -243,7 +243,12 @@ pub fn continue_eye_path(
 
 /// The radiance of the sphere lights an eye segment from `state` meets before its `hit` (the
 /// camera's own ray sees only those visible to the camera).
-fn spheres_seen(renderer: &Renderer, state: &EyeState, hit: Option<Hit>, lambda: &Wavelengths) -> SampledSpectrum {
+fn spheres_seen(
+    renderer: &Renderer,
+    state: &EyeState,
+    hit: Option<Hit>,
+    lambda: &Wavelengths,
+) -> SampledSpectrum {
     let direction = Vec3::from(state.direction);
     let t_max = hit.map_or(f32::INFINITY, |h| h.t);
     renderer

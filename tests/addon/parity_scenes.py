@@ -585,6 +585,32 @@ def lights_seen():
             "Behind the spot light": seen_sphere(spot.location, 0.4)}
 
 
+def spread_light():
+    """A square area light 1 m wide, 2 m above the floor, with Blender's Spread narrowed to 40
+    degrees (a soft box's grid): a pool of light with a soft edge around a grey ball, where a
+    light spreading over 180 degrees lights the whole floor."""
+    clear()
+    matte_floor_and_ball(0.4, (0.5, 0.2, 0.4), segments=48)
+    light = area_light((0.0, 0.0, 2.0), (0.0, 0.0, 0.0), 1.0, 300.0)
+    light.data.spread = math.radians(40)
+    camera((0.0, -6.0, 5.0), (0.0, 0.0, 0.0))
+    return {"Floor": 1, "Grey": 2, "Pool": floor_disc((-0.5, -0.3), 0.5),
+            "Edge": floor_ring((0.0, 0.0), 1.0, 1.4), "Beyond": floor_ring((0.0, 0.0), 1.8, 2.5)}
+
+
+def soft_falloff():
+    """Blender's default point light (Soft Falloff on) with a radius of 0.5, 1 m above the floor
+    beside a ball: close to it, Cycles' disc facing each point lights the floor a fifth less than
+    a sphere would."""
+    clear()
+    matte_floor_and_ball(0.4, (0.9, 0.0, 0.4), segments=48)
+    light = add(bpy.ops.object.light_add, type='POINT', location=(0.0, 0.0, 1.0))
+    light.data.energy, light.data.shadow_soft_size = 100.0, 0.5
+    assert light.data.use_soft_falloff
+    camera((0.0, -6.0, 4.0), (0.0, 0.0, 0.3))
+    return {"Floor": 1, "Grey": 2, "Under": floor_disc((0.0, 0.0), 0.4), "Around": floor_ring((0.0, 0.0), 1.5, 2.5)}
+
+
 def floor_ring(centre, inner, outer, floor_index=1):
     """The floor's pixels (rim left out) between `inner` and `outer` of `centre` (x, y on the
     floor), for the current camera."""
@@ -642,4 +668,5 @@ SCENES = {"glass": glass, "principled_spheres": principled_spheres, "textured": 
           "coated": coated, "sheen": sheen, "leaf": leaf, "warm_light": warm_light, "soft_light": soft_light,
           "hdri": hdri, "ortho_camera": ortho_camera, "shifted_camera": shifted_camera,
           "panorama_camera": panorama_camera, "film_and_holdouts": film_and_holdouts,
-          "spot_light": spot_light, "soft_spot": soft_spot, "sky": sky, "lights_seen": lights_seen}
+          "spot_light": spot_light, "soft_spot": soft_spot, "sky": sky, "lights_seen": lights_seen,
+          "spread_light": spread_light, "soft_falloff": soft_falloff}

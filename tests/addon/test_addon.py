@@ -432,15 +432,30 @@ class Export(unittest.TestCase):
     def test_what_is_not_rendered_of_lights_and_cameras_is_named(self):
         scene = glass_sphere_scene()
         area = bpy.data.objects["Area"].data
-        area.spread = math.radians(60)
+        area.spread = math.radians(0.5)
         scene.camera.data.type, scene.camera.data.panorama_type = 'PANO', 'FISHEYE_EQUISOLID'
         try:
             warnings = sys.modules["caustic.export"].scene_warnings(bpy.context.evaluated_depsgraph_get())
         finally:
             area.spread, scene.camera.data.type = math.pi, 'PERSP'
-        self.assertIn("light 'Area': an area light's Spread is not rendered; it spreads over 180 degrees", warnings)
+        self.assertIn("light 'Area': a Spread under 1 degree is rendered as 1 degree", warnings)
         self.assertIn(f"camera '{scene.camera.name}': the FISHEYE_EQUISOLID panorama is not rendered (Equirectangular "
                       "is); Caustic finds no camera to render with", warnings)
+
+    def test_an_area_lights_spread_and_camera_visibility_are_exported(self):
+        """Blender's Spread and Ray Visibility > Camera reach the renderer in the light's extras."""
+        scene = glass_sphere_scene()
+        light = bpy.data.objects["Area"]
+        light.data.spread, light.visible_camera = math.radians(40), False
+        path = OUT / "spread" / "scene.gltf"
+        path.parent.mkdir()
+        try:
+            sys.modules["caustic.export"].export(scene, path)
+        finally:
+            light.data.spread, light.visible_camera = math.pi, True
+        extras = {n["name"]: n.get("extras", {}).get("caustic") for n in json.loads(path.read_text())["nodes"]}
+        self.assertAlmostEqual(extras["Area"]["area_light"]["spread_deg"], 40.0, places=4)
+        self.assertIs(extras["Area"]["visible_to_camera"], False)
 
     def test_a_light_with_a_colour_temperature_exports_and_keeps_it(self):
         """Blender's glTF exporter raises on a light with a colour temperature; the add-on's export

@@ -161,6 +161,12 @@ class Parity(unittest.TestCase):
     def test_lights_seen(self):
         self.check("lights_seen")
 
+    def test_spread_light(self):
+        self.check("spread_light")
+
+    def test_soft_falloff(self):
+        self.check("soft_falloff")
+
     def test_soft_spot(self):
         self.check("soft_spot")
 
