@@ -11,7 +11,9 @@ temperature have it switched off while the exporter runs (it raises on them) and
 """
 
 import math
+import os
 import pathlib
+import tempfile
 import time
 
 import bpy
@@ -190,10 +192,18 @@ BAKED_WORLD_WIDTH = 1024
 def bake_world(world, folder, width=BAKED_WORLD_WIDTH):
     """Renders `world` as Cycles sees it into `folder` as an equirectangular EXR, in a separate
     Blender (a render cannot start inside a render; bake_world.py says how) and returns its file
-    name. The world travels in a .blend of its own."""
+    name. The world travels in a .blend of its own. A bake is kept in WORLD_CACHE under the
+    world's fingerprint, so that rendering again (F12 after F12, each frame of an animation) does
+    not bake again until something the bake shows changes."""
+    import shutil
     import subprocess
     import sys
-    blend, image = folder / "world.blend", folder / "world.exr"
+    image = folder / "world.exr"
+    cached = WORLD_CACHE / f"{world_fingerprint(world, width)}.exr"
+    if cached.exists():
+        shutil.copyfile(cached, image)
+        return image.name
+    blend = folder / "world.blend"
     # Absolute paths: images the world uses by paths relative to the user's .blend still load.
     bpy.data.libraries.write(str(blend), {world}, fake_user=True, path_remap='ABSOLUTE')
     script = pathlib.Path(__file__).resolve().parent / "bake_world.py"
@@ -206,7 +216,73 @@ def bake_world(world, folder, width=BAKED_WORLD_WIDTH):
     if done.returncode != 0 or not image.exists():
         reason = (done.stderr or done.stdout).strip().splitlines()[-1:] or ["no output"]
         raise RuntimeError(f"Blender could not bake world '{world.name}' into an image: {reason[0]}")
+    WORLD_CACHE.mkdir(parents=True, exist_ok=True)
+    partial = cached.with_suffix(f".{os.getpid()}.part")
+    shutil.copyfile(image, partial)
+    partial.replace(cached)
     return image.name
+
+
+# Where baked worlds are kept between renders (the system's temporary folder: a cache, not data).
+WORLD_CACHE = pathlib.Path(tempfile.gettempdir()) / "caustic-baked-worlds"
+
+
+def world_fingerprint(world, width):
+    """A hash of everything a bake of `world` at `width` shows: each node's kind and own settings,
+    its inputs' values, the links, node groups within, and each image's file and the time it was
+    last changed (or its packed bytes), with Blender's version and the bake's own script."""
+    import hashlib
+    digest = hashlib.sha256(f"{bpy.app.version_string} {width}".encode())
+    digest.update((pathlib.Path(__file__).resolve().parent / "bake_world.py").read_bytes())
+    node_tree_fingerprint(world.node_tree, digest, set())
+    return digest.hexdigest()[:32]
+
+
+# Settings every node has that change nothing a render shows (where it is drawn, whether selected).
+_NODE_BASICS = {p.identifier for p in bpy.types.ShaderNode.bl_rna.properties}
+
+
+def node_tree_fingerprint(tree, digest, seen):
+    """Feeds `digest` with what a render of node tree `tree` depends on (see world_fingerprint)."""
+    if tree is None or tree.name in seen:
+        return
+    seen.add(tree.name)
+    for node in sorted(tree.nodes, key=lambda n: n.name):
+        digest.update(f"node {node.name} {node.bl_idname} {node.mute}".encode())
+        for prop in node.bl_rna.properties:
+            if prop.identifier not in _NODE_BASICS:
+                setting_fingerprint(getattr(node, prop.identifier), digest, seen)
+        for socket in node.inputs:
+            value = getattr(socket, "default_value", None)
+            digest.update(f"input {socket.identifier} {value_text(value)}".encode())
+    for link in tree.links:
+        digest.update(f"link {link.from_node.name}:{link.from_socket.identifier} "
+                      f"{link.to_node.name}:{link.to_socket.identifier}".encode())
+
+
+def setting_fingerprint(value, digest, seen):
+    """Feeds `digest` with one node setting: an image by its file, a node group by its tree."""
+    if isinstance(value, bpy.types.Image):
+        if value.packed_file is not None:
+            digest.update(bytes(value.packed_file.data))
+        else:
+            path = pathlib.Path(bpy.path.abspath(value.filepath, library=value.library))
+            changed = path.stat().st_mtime_ns if path.exists() else None
+            digest.update(f"image {path} {changed} {value.colorspace_settings.name}".encode())
+    elif isinstance(value, bpy.types.NodeTree):
+        node_tree_fingerprint(value, digest, seen)
+    elif isinstance(value, bpy.types.ID):
+        digest.update(f"id {value.name}".encode())
+    elif not isinstance(value, bpy.types.bpy_struct):
+        digest.update(f"setting {value_text(value)}".encode())
+
+
+def value_text(value):
+    """A value as text: arrays (colours, vectors) element by element."""
+    try:
+        return repr(tuple(value)) if not isinstance(value, str) else value
+    except TypeError:
+        return repr(value)
 
 
 def scene_extras(scene, world):

@@ -547,6 +547,36 @@ class World(unittest.TestCase):
         self.assertEqual(pixels.shape[:2], (512, 1024))
         np.testing.assert_allclose(pixels.reshape(-1, 3).mean(axis=0), [0.75, 0.0, 0.25], atol=0.005)
 
+    def test_a_baked_world_is_baked_again_only_when_it_changes(self):
+        """A Sky Texture's bake is kept: exporting again reuses it (the same bytes, no second
+        Blender), until the sun moves."""
+        export = sys.modules["caustic.export"]
+        scene = glass_sphere_scene()
+        world = bpy.data.worlds.new("Cached sky")
+        sky = world.node_tree.nodes.new("ShaderNodeTexSky")
+        world.node_tree.links.new(sky.outputs["Color"], world.node_tree.nodes["Background"].inputs["Color"])
+        scene.world = world
+        folders = [OUT / f"cached-{i}" for i in range(2)]
+        for folder in folders:
+            folder.mkdir()
+        export.bake_world(world, folders[0], width=64)
+        cached = export.WORLD_CACHE / f"{export.world_fingerprint(world, 64)}.exr"
+        self.assertTrue(cached.exists())
+        # Marked, the kept bake shows where the next export's image comes from.
+        cached.write_bytes(cached.read_bytes() + b"kept")
+        export.bake_world(world, folders[1], width=64)
+        self.assertTrue((folders[1] / "world.exr").read_bytes().endswith(b"kept"))
+        cached.unlink()
+        before = export.world_fingerprint(world, 64)
+        sky.sun_elevation += 0.1
+        self.assertNotEqual(export.world_fingerprint(world, 64), before)
+        world.node_tree.nodes["Background"].inputs["Strength"].default_value = 3.0
+        sky.sun_elevation -= 0.1
+        self.assertNotEqual(export.world_fingerprint(world, 64), before)
+        world.node_tree.nodes["Background"].location = (500.0, 0.0)
+        world.node_tree.nodes["Background"].inputs["Strength"].default_value = 1.0
+        self.assertEqual(export.world_fingerprint(world, 64), before, "moving a node changes no bake")
+
 
 if __name__ == "__main__":
     unittest.main(verbosity=2)
