@@ -19,7 +19,9 @@ Writes scenes/<name>.gltf and scenes/<name>.bin:
 - gems: a diamond and a blue sapphire, cut with facets, dispersive, the sapphire coloured by a
   Volume Absorption node, under a small bright light;
 - water_glass: a tumbler of blue-green water (a Volume Absorption node, dispersive water) with a
-  frosted ice cube floating in it, under a low sun-like light.
+  frosted ice cube floating in it, under a low sun-like light;
+- many_lights: a room lit only by 2400 small coloured bulbs of varied strength strung under its
+  ceiling, with a glass sphere on a table (the light tree's scene).
 
 Blender's exporter drops area lights and the render resolution, so they travel as `caustic`
 custom properties, which the exporter writes as glTF extras (see docs/extras.md). The gems and the
@@ -418,6 +420,72 @@ def make_shot(moving_camera):
     export("shot_moving_camera" if moving_camera else "shot", animated=True)
 
 
+# The colours of the many-light scene's bulbs (linear) and the emission strengths they come in.
+BULB_COLOURS = {"Warm": (1.0, 0.75, 0.45), "Red": (1.0, 0.1, 0.05), "Green": (0.1, 1.0, 0.2),
+                "Blue": (0.15, 0.3, 1.0), "Amber": (1.0, 0.5, 0.05), "Pink": (1.0, 0.3, 0.6)}
+BULB_STRENGTHS = (2.0, 8.0, 32.0)
+
+
+def string_lights(strings=12, bulbs_per_string=200, size=0.025):
+    """Strings of small two-sided emissive quads (bulbs) sagging across a room's ceiling from wall
+    to wall, of varied colour and strength: one mesh, a material per colour and strength. Gives
+    the bulbs' number."""
+    import random
+    rng = random.Random(7)
+    materials = [material(f"Bulb {name} {strength:g}", (0.0, 0.0, 0.0), emission=colour, emission_strength=strength)
+                 for name, colour in BULB_COLOURS.items() for strength in BULB_STRENGTHS]
+    mesh = bpy.data.meshes.new("String lights")
+    obj = bpy.data.objects.new("String lights", mesh)
+    bpy.context.scene.collection.objects.link(obj)
+    for m in materials:
+        mesh.materials.append(m)
+    bm = bmesh.new()
+    for s in range(strings):
+        y = -1.8 + 3.6 * (s + 0.5) / strings
+        for b in range(bulbs_per_string):
+            t = (b + 0.5) / bulbs_per_string
+            x = -1.95 + 3.9 * t
+            z = 2.4 - 0.5 * math.sin(math.pi * t) - 0.05 * rng.random()
+            normal = [rng.uniform(-1, 1) for _ in range(3)]
+            length = math.sqrt(sum(c * c for c in normal)) or 1.0
+            nx, ny, nz = (c / length for c in normal)
+            # Two edges across the normal.
+            ax, ay, az = (ny, -nx, 0.0) if abs(nz) < 0.9 else (0.0, nz, -ny)
+            a_len = math.sqrt(ax * ax + ay * ay + az * az)
+            ax, ay, az = ax / a_len * size, ay / a_len * size, az / a_len * size
+            bx, by, bz = ny * az - nz * ay, nz * ax - nx * az, nx * ay - ny * ax
+            corners = [(x + sx * ax + sy * bx, y + sx * ay + sy * by, z + sx * az + sy * bz)
+                       for sx, sy in ((-0.5, -0.5), (0.5, -0.5), (0.5, 0.5), (-0.5, 0.5))]
+            face = bm.faces.new([bm.verts.new(c) for c in corners])
+            face.material_index = rng.randrange(len(materials))
+    bm.to_mesh(mesh)
+    bm.free()
+    return strings * bulbs_per_string
+
+
+def many_lights_scene():
+    """A room lit only by 2400 small bulbs of six colours and three strengths (16x apart) strung
+    under its ceiling, with a glass sphere on a white table: next-event estimation must find,
+    among thousands, the bulbs near each point (the light tree's scene), built but not exported."""
+    reset()
+    white = material("White", (0.7, 0.7, 0.7))
+    plane("Floor", 4, (0, 0, 0), (0, 0, 0), white)
+    plane("Ceiling", 4, (0, 0, 2.5), (math.pi, 0, 0), white)
+    plane("BackWall", 4, (0, 2, 1.25), (math.pi / 2, 0, 0), material("Blue wall", (0.2, 0.3, 0.6)))
+    plane("LeftWall", 4, (-2, 0, 1.25), (0, math.pi / 2, 0), white)
+    plane("RightWall", 4, (2, 0, 1.25), (0, -math.pi / 2, 0), white)
+    block("Table", (1.2, 0.8, 0.7), (0.0, 0.3, 0.35), 0.3, white)
+    glass_sphere((0.0, 0.3, 0.95), 0.25, glass_material())
+    string_lights()
+    camera((0.0, -3.6, 1.3), (0.0, 0.5, 1.2), lens_mm=24.0)
+    set_resolution(320, 240)
+
+
+def make_many_lights():
+    many_lights_scene()
+    export("many_lights")
+
+
 if __name__ == "__main__":
     make_gems()
     make_water_glass()
@@ -428,3 +496,4 @@ if __name__ == "__main__":
     make_cornell_diffuse()
     make_furnace()
     make_spot_glass()
+    make_many_lights()

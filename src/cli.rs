@@ -5,7 +5,7 @@ use std::path::{Path, PathBuf};
 use clap::{Args, Parser, Subcommand};
 
 use crate::error::Statistic;
-use crate::frames::{self, ProgressStyle, RenderSettings};
+use crate::frames::{self, LightSampling, ProgressStyle, RenderSettings};
 use crate::monitor::ErrorSettings;
 
 /// The bundled demo scene, used when no scene is given.
@@ -126,6 +126,10 @@ pub struct RenderArgs {
     /// radiance relative to white at that wavelength, in its colour).
     #[arg(long, value_name = "NM", value_parser = wavelength, conflicts_with = "spectral_bins")]
     wavelength: Option<f32>,
+    /// How next-event estimation chooses a light: by the light tree (power, distance and
+    /// orientation as seen from each point), or in proportion to power alone.
+    #[arg(long, value_enum, default_value_t = LightSampling::Tree)]
+    light_sampling: LightSampling,
     /// Also write Cycles' Denoising Albedo and Denoising Normal passes (for Blender's Denoise
     /// node, Open Image Denoise).
     #[arg(long)]
@@ -332,6 +336,7 @@ impl RenderArgs {
             seed: self.seed,
             progress: self.progress,
             wavelength_nm: self.wavelength,
+            light_sampling: self.light_sampling,
             spectral_bins: self.spectral_bins,
             denoising_passes: self.denoising_passes,
             frames: self.frames.0.clone(),

@@ -21,6 +21,7 @@ use crate::sampling::pass_time_sample;
 use crate::scene::description::{LensSettings, Shutter};
 use crate::scene::pose::lens;
 use crate::scene::{Description, Prepared, Scene, TimeRange, DEFAULT_RADIUS_FRACTION};
+pub use crate::sppm::LightSampling;
 use crate::sppm::{run_shared_pass, Crop, PassSamples, PassStats, PixelEstimate, Renderer, SppmSettings};
 
 /// Set when the user asks the render to stop (Ctrl-C, SIGTERM): the pass in flight finishes,
@@ -76,6 +77,8 @@ pub struct RenderSettings {
     pub progress: ProgressStyle,
     /// Render every pass at this wavelength (nm).
     pub wavelength_nm: Option<f32>,
+    /// How next-event estimation chooses a light.
+    pub light_sampling: LightSampling,
     /// Spectral bands written beside Combined (0 for none).
     pub spectral_bins: usize,
     /// Write Cycles' Denoising Albedo and Denoising Normal passes.
@@ -115,6 +118,7 @@ impl RenderSettings {
             seed: 1,
             progress: ProgressStyle::None,
             wavelength_nm: None,
+            light_sampling: LightSampling::Tree,
             spectral_bins: 0,
             denoising_passes: false,
             shutter_frames: None,
@@ -291,6 +295,7 @@ fn fingerprint(
         "initial_radius": sppm.initial_radius,
         "seed": sppm.seed,
         "wavelength_nm": sppm.fixed_wavelength_nm,
+        "light_sampling": format!("{:?}", sppm.light_sampling),
         "spectral_bins": settings.spectral_bins,
         "denoising_passes": settings.denoising_passes,
         "shutter": [shutter.open, shutter.length],
@@ -339,6 +344,7 @@ impl Shot {
             initial_radius: settings.radius.unwrap_or_else(|| default_radius(&first, photons_per_pass)),
             seed: settings.seed,
             fixed_wavelength_nm: settings.wavelength_nm,
+            light_sampling: settings.light_sampling,
         };
         let still =
             (!prepared.has_motion()).then(|| (first, Accel::new(Arc::clone(&fixed_bvh), Bvh::empty())));

@@ -12,9 +12,11 @@
 //! Distant lights (sun, world) emit photons from a disc covering the scene's bounding sphere.
 
 mod sphere;
+mod tree;
 mod world;
 
 pub use sphere::{Beam, SoftFalloff, SphereLight, SpotFalloff};
+pub use tree::LightTree;
 pub use world::World;
 
 use glam::{Vec2, Vec3, Vec3A};

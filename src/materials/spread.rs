@@ -37,6 +37,11 @@ impl Spread {
         })
     }
 
+    /// Cosine of half the spread: no light leaves farther from the normal.
+    pub fn cos_half(&self) -> f32 {
+        (1.0 - self.sin_half * self.sin_half).max(0.0).sqrt()
+    }
+
     /// The factor on the radiance leaving at `cos` from the normal.
     pub fn attenuation(&self, cos: f32) -> f32 {
         if cos <= 0.0 {

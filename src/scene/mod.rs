@@ -27,7 +27,7 @@ use glam::{Vec2, Vec3, Vec3A};
 
 use crate::accel::{Bvh, Hit};
 use crate::camera::Camera;
-use crate::lights::{BoundingSphere, Light, SphereLight};
+use crate::lights::{BoundingSphere, Light, LightTree, SphereLight};
 use crate::materials::{Material, ShadingFrame, SurfaceInputs};
 use crate::spectrum::{SampledSpectrum, Wavelengths};
 use crate::texture::UV_SETS;
@@ -138,6 +138,8 @@ pub struct Scene {
     pub open_edges: Arc<OpenEdges>,
     /// Indices in `lights` of the distant lights a ray leaving the scene can see.
     pub distant_lights: Vec<usize>,
+    /// The light tree over `lights`, for next-event estimation.
+    pub light_tree: Arc<LightTree>,
     /// Indices in `lights` of the lights with a sphere that rays can meet.
     pub sphere_lights: Vec<usize>,
     /// Indices in `lights` of the lights that move within the prepared range.

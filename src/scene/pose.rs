@@ -16,7 +16,8 @@ use super::{
 use crate::accel::Bvh;
 use crate::camera::Camera;
 use crate::lights::{
-    Beam, BoundingSphere, CutEmission, Emission, EmittingTriangle, Light, SphereLight, TexturedEmission,
+    Beam, BoundingSphere, CutEmission, Emission, EmittingTriangle, Light, LightTree, SphereLight,
+    TexturedEmission,
 };
 use crate::materials::Material;
 
@@ -294,6 +295,7 @@ impl Prepared {
             distant_lights.push(lights.len());
             lights.push(Light::World(world));
         }
+        let light_tree = Arc::new(LightTree::new(&lights));
         let camera_world = d.rig.world(d.camera.node, time);
         Scene {
             fixed: Arc::clone(&self.fixed),
@@ -304,6 +306,7 @@ impl Prepared {
             moving_triangle_lights,
             open_edges,
             distant_lights,
+            light_tree,
             sphere_lights,
             moving_lights,
             camera: Camera::from_node(camera_world, d.camera.projection, d.camera.shift).with_lens(self.lens),

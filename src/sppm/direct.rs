@@ -87,7 +87,7 @@ impl DirectLight<'_> {
     /// importance sampling against BSDF sampling (Veach 1997, chapter 9).
     fn light_sampled(&self, rng: &mut PixelSampler, stats: &mut PassStats) -> DirectTerm {
         let (renderer, point, wavelengths) = (self.renderer, self.point, self.wavelengths);
-        let Some((index, p_choice)) = renderer.light_choice.sample(rng.next_1d()) else {
+        let Some((index, p_choice)) = renderer.choose_light(point.p, point.frame.n(), rng.next_1d()) else {
             return DirectTerm::ZERO;
         };
         let light = &renderer.scene.lights[index];
@@ -143,7 +143,8 @@ impl DirectLight<'_> {
         stats.shadow_rays += 1;
         let origin = offset_origin(point.p, point.frame.ng(), sample.wi, point.scale());
         let light_pdf = |index: usize, q: Vec3| {
-            renderer.light_choice.probability(index) * scene.lights[index].pdf_incident(point.p, sample.wi, q)
+            let p_choice = renderer.light_probability(point.p, point.frame.n(), index);
+            p_choice * scene.lights[index].pdf_incident(point.p, sample.wi, q)
         };
         let (hit, through) = if renderer.has_cut_away_surfaces {
             see_through::first_hit(renderer, wavelengths, origin, sample.wi)

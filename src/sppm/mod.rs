@@ -20,6 +20,7 @@ mod visible;
 pub use guides::Guide;
 pub use photons::Photon;
 pub use renderer::{
-    Crop, PassSamples, PassStats, PixelEstimate, Renderer, SppmSettings, VisiblePoint, MAX_DEPTH,
+    Crop, LightSampling, PassSamples, PassStats, PixelEstimate, Renderer, SppmSettings, VisiblePoint,
+    MAX_DEPTH,
 };
 pub use shared::{run_shared_pass, SharedPassOutput};

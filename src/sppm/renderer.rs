@@ -5,7 +5,7 @@ use glam::Vec3;
 use std::sync::{Mutex, PoisonError};
 
 use crate::accel::Accel;
-use crate::lights::Light;
+use crate::lights::{Light, LightTree};
 use crate::materials::{Bsdf, ShadingFrame};
 use crate::sampling::{pass_sample, Distribution1D};
 use crate::scene::Scene;
@@ -113,6 +113,19 @@ pub struct SppmSettings {
     pub seed: u64,
     /// Render every pass at this wavelength instead of sampling them per pass.
     pub fixed_wavelength_nm: Option<f32>,
+    /// How next-event estimation chooses a light.
+    pub light_sampling: LightSampling,
+}
+
+/// How next-event estimation chooses a light (photons always leave lights in proportion to their
+/// power).
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, clap::ValueEnum)]
+pub enum LightSampling {
+    /// In proportion to its power alone.
+    Power,
+    /// By the light tree: power, distance and orientation as seen from the point.
+    #[default]
+    Tree,
 }
 
 impl SppmSettings {
@@ -238,6 +251,8 @@ pub struct Renderer<'a> {
     pub(super) scene: &'a Scene,
     pub(super) accel: &'a Accel,
     pub(super) light_choice: Distribution1D,
+    /// The scene's light tree, where next-event estimation uses it.
+    light_tree: Option<&'a LightTree>,
     pub(super) settings: SppmSettings,
     /// Some material's alpha cuts its surface away somewhere: shadow rays look through.
     pub(super) has_cut_away_surfaces: bool,
@@ -289,6 +304,7 @@ impl<'a> Renderer<'a> {
             scene,
             accel,
             light_choice,
+            light_tree: (settings.light_sampling == LightSampling::Tree).then_some(&*scene.light_tree),
             settings,
             has_cut_away_surfaces: scene.materials.iter().any(|m| m.alpha.cuts()),
             has_volumes: scene.materials.iter().any(|m| m.volume.is_some()),
@@ -302,6 +318,23 @@ impl<'a> Renderer<'a> {
     /// paths must choose their lights alike).
     pub fn choosing_lights_as(other: &Renderer, scene: &'a Scene, accel: &'a Accel) -> Self {
         Renderer::with_light_choice(scene, accel, other.light_choice.clone(), other.settings.clone())
+    }
+
+    /// A light for next-event estimation at `p`, of shading normal `n`, with the probability of
+    /// choosing it; `None` when no light reaches `p`.
+    pub(super) fn choose_light(&self, p: Vec3, n: Vec3, u: f32) -> Option<(usize, f32)> {
+        match self.light_tree {
+            Some(tree) => tree.sample(p, n, u),
+            None => self.light_choice.sample(u),
+        }
+    }
+
+    /// The probability that [`Renderer::choose_light`] at `p` (normal `n`) chooses light `index`.
+    pub(super) fn light_probability(&self, p: Vec3, n: Vec3, index: usize) -> f32 {
+        match self.light_tree {
+            Some(tree) => tree.probability(p, n, index),
+            None => self.light_choice.probability(index),
+        }
     }
 
     /// The volumes the camera is in.
