@@ -84,38 +84,20 @@ impl LightBounds {
         }
     }
 
-    /// An upper bound, up to a constant, of the light these lights send to a point `p` whose
-    /// surface has the unit normal `n` (zero: no surface). pbrt-v4's `LightBounds::Importance`.
-    fn importance(&self, p: Vec3, n: Vec3) -> f32 {
-        let centre = self.centroid();
-        let d2 = p.distance_squared(centre).max((self.hi - self.lo).length() / 2.0);
-        let wi = (p - centre).normalize_or_zero();
-        let mut cos_w = self.axis.dot(wi);
-        if self.two_sided {
-            cos_w = cos_w.abs();
+    /// What sampling reads of these bounds, computed once.
+    fn prepared(&self) -> NodeBounds {
+        let half_diagonal2 = (self.hi - self.lo).length_squared() / 4.0;
+        NodeBounds {
+            centre: self.centroid(),
+            radius2: half_diagonal2,
+            nearest2: half_diagonal2.sqrt(),
+            axis: self.axis,
+            cos_o: self.cos_o,
+            sin_o: (1.0 - self.cos_o * self.cos_o).max(0.0).sqrt(),
+            cos_e: self.cos_e,
+            phi: self.phi,
+            two_sided: self.two_sided,
         }
-        let sin_w = (1.0 - cos_w * cos_w).max(0.0).sqrt();
-        // The cone of directions from p that the box covers.
-        let radius2 = (self.hi - self.lo).length_squared() / 4.0;
-        let cos_b = if p.distance_squared(centre) <= radius2 {
-            -1.0
-        } else {
-            (1.0 - radius2 / p.distance_squared(centre)).max(0.0).sqrt()
-        };
-        let sin_b = (1.0 - cos_b * cos_b).max(0.0).sqrt();
-        let sin_o = (1.0 - self.cos_o * self.cos_o).max(0.0).sqrt();
-        let (cos_x, sin_x) = angle_less((cos_w, sin_w), (self.cos_o, sin_o));
-        let (cos_p, _) = angle_less((cos_x, sin_x), (cos_b, sin_b));
-        if cos_p <= self.cos_e {
-            return 0.0;
-        }
-        let mut importance = self.phi * cos_p / d2;
-        if n != Vec3::ZERO {
-            let cos_i = wi.dot(n).abs();
-            let sin_i = (1.0 - cos_i * cos_i).max(0.0).sqrt();
-            importance *= angle_less((cos_i, sin_i), (cos_b, sin_b)).0;
-        }
-        importance.max(0.0)
     }
 
     /// pbrt-v4's cost of a node with these bounds (the surface area orientation heuristic), in a
@@ -134,6 +116,53 @@ impl LightBounds {
         let d = self.hi - self.lo;
         let area = 2.0 * (d.x * d.y + d.y * d.z + d.z * d.x);
         self.phi * orientation * stretch * area
+    }
+}
+
+/// A node's bounds as sampling reads them (`LightBounds::prepared`).
+#[derive(Clone, Copy, Debug)]
+struct NodeBounds {
+    /// The box's centre.
+    centre: Vec3,
+    /// The square of the radius of the sphere around the box.
+    radius2: f32,
+    /// The least squared distance importance divides by (pbrt-v4's: half the box's diagonal).
+    nearest2: f32,
+    axis: Vec3,
+    cos_o: f32,
+    sin_o: f32,
+    cos_e: f32,
+    phi: f32,
+    two_sided: bool,
+}
+
+impl NodeBounds {
+    /// An upper bound, up to a constant, of the light these lights send to a point `p` whose
+    /// surface has the unit normal `n` (zero: no surface). pbrt-v4's `LightBounds::Importance`.
+    fn importance(&self, p: Vec3, n: Vec3) -> f32 {
+        let to_p = p - self.centre;
+        let distance2 = to_p.length_squared();
+        let wi = to_p / distance2.sqrt().max(f32::MIN_POSITIVE);
+        let mut cos_w = self.axis.dot(wi);
+        if self.two_sided {
+            cos_w = cos_w.abs();
+        }
+        let sin_w = (1.0 - cos_w * cos_w).max(0.0).sqrt();
+        // The cone of directions from p that the box's sphere covers.
+        let cos_b = if distance2 <= self.radius2 { -1.0 } else { (1.0 - self.radius2 / distance2).sqrt() };
+        let sin_b = (1.0 - cos_b * cos_b).max(0.0).sqrt();
+        let (cos_x, sin_x) = angle_less((cos_w, sin_w), (self.cos_o, self.sin_o));
+        let (cos_p, _) = angle_less((cos_x, sin_x), (cos_b, sin_b));
+        if cos_p <= self.cos_e {
+            return 0.0;
+        }
+        let mut importance = self.phi * cos_p / distance2.max(self.nearest2);
+        if n != Vec3::ZERO {
+            let cos_i = wi.dot(n).abs();
+            let sin_i = (1.0 - cos_i * cos_i).max(0.0).sqrt();
+            importance *= angle_less((cos_i, sin_i), (cos_b, sin_b)).0;
+        }
+        importance.max(0.0)
     }
 }
 
@@ -168,7 +197,7 @@ fn cone_union(a: (Vec3, f32), b: (Vec3, f32)) -> (Vec3, f32) {
 /// A node: its bounds, and its light (a leaf) or its second child (the first follows it).
 #[derive(Clone, Copy, Debug)]
 struct Node {
-    bounds: LightBounds,
+    bounds: NodeBounds,
     leaf: bool,
     index: u32,
 }
@@ -211,18 +240,18 @@ impl LightTree {
     fn build(&mut self, leaves: &mut [(LightBounds, u32)], bits: u64, depth: u32) -> LightBounds {
         let at = self.nodes.len();
         if let [(bounds, light)] = leaves {
-            self.nodes.push(Node { bounds: *bounds, leaf: true, index: *light });
+            self.nodes.push(Node { bounds: bounds.prepared(), leaf: true, index: *light });
             self.paths[*light as usize] = Some((bits, depth));
             return *bounds;
         }
-        self.nodes.push(Node { bounds: leaves[0].0, leaf: false, index: 0 });
+        self.nodes.push(Node { bounds: leaves[0].0.prepared(), leaf: false, index: 0 });
         let mid = split(leaves, depth);
         let (first, second) = leaves.split_at_mut(mid);
         let a = self.build(first, bits, depth + 1);
         self.nodes[at].index = self.nodes.len() as u32;
         let b = self.build(second, bits | (1 << depth), depth + 1);
         let bounds = a.union(&b);
-        self.nodes[at].bounds = bounds;
+        self.nodes[at].bounds = bounds.prepared();
         bounds
     }
 
@@ -303,9 +332,11 @@ impl LightTree {
 }
 
 /// Reorders `leaves` and gives where to split them (neither side empty): at the cheapest of the
-/// bucket boundaries along each axis by pbrt-v4's cost, else (or below `MAX_DEPTH` - 8 levels
-/// from the limit) at the median of the centroids along the longest axis.
+/// bucket boundaries along each axis by pbrt-v4's cost, else (or where only median splits would
+/// keep the leaves within `MAX_DEPTH`) at the median of the centroids along the longest axis.
 fn split(leaves: &mut [(LightBounds, u32)], depth: u32) -> usize {
+    // Median splits from here on would still keep every leaf within MAX_DEPTH.
+    let levels_needed = usize::BITS - leaves.len().leading_zeros();
     let (lo, hi) = leaves
         .iter()
         .fold((Vec3::INFINITY, Vec3::NEG_INFINITY), |(lo, hi), (b, _)| (lo.min(b.lo), hi.max(b.hi)));
@@ -318,7 +349,7 @@ fn split(leaves: &mut [(LightBounds, u32)], depth: u32) -> usize {
     };
     let mut best: Option<(f32, usize, usize)> = None;
     for axis in 0..3 {
-        if !(chi[axis] > clo[axis]) || depth + 8 > MAX_DEPTH {
+        if !(chi[axis] > clo[axis]) || depth + levels_needed > MAX_DEPTH {
             continue;
         }
         let mut buckets: [Option<LightBounds>; BUCKETS] = [None; BUCKETS];

@@ -22,6 +22,8 @@ SCENES = {
     "frosted": frosted_glass_scene,
     # The demo with 10x its triangles (a finer sphere), for cost against scene size.
     "caustic_10x_triangles": lambda: make_scenes.cornell_glass_scene(sphere_segments=304),
+    # A room lit by 2400 small bulbs (the light tree's scene).
+    "many_lights": make_scenes.many_lights_scene,
 }
 
 
@@ -32,7 +34,7 @@ def build(name, resolution, binary):
     render_in_blender.enable_addon(binary)
     for obj in bpy.data.objects:
         obj.pop("caustic", None)
-        # Caustic shows lights to the camera; Cycles hides area lights unless told.
+        # The benchmarks' lights are seen by the camera (Blender's default hides them).
         obj.visible_camera = True
     scene = bpy.context.scene
     scene.pop("caustic", None)
