@@ -256,7 +256,7 @@ impl LightTree {
     }
 
     /// A light for next-event estimation at `p` (of surface normal `n`, or zero), with the
-    /// probability it was chosen with; `None` when no light can reach `p`.
+    /// probability it was chosen with; `None` when the scene has no light.
     pub fn sample(&self, p: Vec3, n: Vec3, u: f32) -> Option<(usize, f32)> {
         let (top, p_top) = self.top.sample(u)?;
         if let Some(&distant) = self.distant.get(top) {
@@ -265,9 +265,6 @@ impl LightTree {
         // u rescaled within the tree's share of the top choice.
         let below = 1.0 - p_top;
         let mut u = ((u - below) / p_top).clamp(0.0, 1.0 - f32::EPSILON);
-        if !(self.nodes[0].bounds.importance(p, n) > 0.0) {
-            return None;
-        }
         let (mut node, mut probability) = (0, p_top);
         loop {
             let Node { leaf, index, .. } = self.nodes[node];
@@ -296,9 +293,6 @@ impl LightTree {
         let Some((bits, depth)) = self.paths.get(light).copied().flatten() else {
             return 0.0;
         };
-        if !(self.nodes[0].bounds.importance(p, n) > 0.0) {
-            return 0.0;
-        }
         let mut probability = self.top.probability(self.distant.len());
         let mut node = 0;
         for level in 0..depth {
