@@ -39,9 +39,10 @@ struct LightBounds {
 }
 
 impl LightBounds {
-    /// The bounds of `light`, or `None` for a distant light or one that emits nothing.
-    fn of(light: &Light) -> Option<LightBounds> {
-        let phi = light.power() as f32;
+    /// The bounds of `light` of luminous power `power`, or `None` for a distant light or one
+    /// that emits nothing.
+    fn of(light: &Light, power: f64) -> Option<LightBounds> {
+        let phi = power as f32;
         if !(phi > 0.0) {
             return None;
         }
@@ -215,10 +216,11 @@ pub struct LightTree {
 }
 
 impl LightTree {
-    /// The tree over `lights` (distant ones beside it).
-    pub fn new(lights: &[Light]) -> LightTree {
-        let mut leaves: Vec<(LightBounds, u32)> =
-            lights.iter().enumerate().filter_map(|(i, l)| Some((LightBounds::of(l)?, i as u32))).collect();
+    /// The tree over `lights` of luminous powers `powers` (distant ones beside it).
+    pub fn new(lights: &[Light], powers: &[f64]) -> LightTree {
+        let mut leaves: Vec<(LightBounds, u32)> = (lights.iter().zip(powers).enumerate())
+            .filter_map(|(i, (l, &power))| Some((LightBounds::of(l, power)?, i as u32)))
+            .collect();
         let distant: Vec<usize> = lights
             .iter()
             .enumerate()
@@ -230,7 +232,7 @@ impl LightTree {
             tree.build(&mut leaves, 0, 0);
         }
         let tree_power = tree.nodes.first().map_or(0.0, |n| f64::from(n.bounds.phi));
-        tree.top = Distribution1D::new(distant.iter().map(|&i| lights[i].power()).chain([tree_power]));
+        tree.top = Distribution1D::new(distant.iter().map(|&i| powers[i]).chain([tree_power]));
         tree.distant = distant;
         tree
     }
@@ -425,7 +427,8 @@ mod tests {
     #[test]
     fn the_probabilities_it_samples_with_are_those_it_reports_and_sum_to_one() {
         let lights = many_lights();
-        let tree = LightTree::new(&lights);
+        let powers: Vec<f64> = lights.iter().map(Light::power).collect();
+        let tree = LightTree::new(&lights, &powers);
         for (p, n) in [
             (Vec3::new(0.0, 0.0, 0.0), Vec3::Y),
             (Vec3::new(4.0, 2.0, -3.0), Vec3::X),

@@ -29,6 +29,7 @@ use crate::accel::{Bvh, Hit};
 use crate::camera::Camera;
 use crate::lights::{BoundingSphere, Light, LightTree, SphereLight};
 use crate::materials::{Material, ShadingFrame, SurfaceInputs};
+use crate::sampling::Distribution1D;
 use crate::spectrum::{SampledSpectrum, Wavelengths};
 use crate::texture::UV_SETS;
 
@@ -140,6 +141,9 @@ pub struct Scene {
     pub distant_lights: Vec<usize>,
     /// The light tree over `lights`, for next-event estimation.
     pub light_tree: Arc<LightTree>,
+    /// `lights` in proportion to their luminous power (photons, and next-event estimation without
+    /// the tree).
+    pub light_choice: Arc<Distribution1D>,
     /// Indices in `lights` of the lights with a sphere that rays can meet.
     pub sphere_lights: Vec<usize>,
     /// Indices in `lights` of the lights that move within the prepared range.

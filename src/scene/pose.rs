@@ -20,6 +20,7 @@ use crate::lights::{
     TexturedEmission,
 };
 use crate::materials::Material;
+use crate::sampling::Distribution1D;
 
 /// A span of glTF time, in seconds, that a render covers (frames and their shutters).
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -295,7 +296,9 @@ impl Prepared {
             distant_lights.push(lights.len());
             lights.push(Light::World(world));
         }
-        let light_tree = Arc::new(LightTree::new(&lights));
+        let powers: Vec<f64> = lights.iter().map(Light::power).collect();
+        let light_tree = Arc::new(LightTree::new(&lights, &powers));
+        let light_choice = Arc::new(Distribution1D::new(powers));
         let camera_world = d.rig.world(d.camera.node, time);
         Scene {
             fixed: Arc::clone(&self.fixed),
@@ -307,6 +310,7 @@ impl Prepared {
             open_edges,
             distant_lights,
             light_tree,
+            light_choice,
             sphere_lights,
             moving_lights,
             camera: Camera::from_node(camera_world, d.camera.projection, d.camera.shift).with_lens(self.lens),

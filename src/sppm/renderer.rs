@@ -2,10 +2,10 @@
 //! scene, its BVHs and how lights are chosen), and what a pass produces and counts.
 
 use glam::Vec3;
-use std::sync::{Mutex, PoisonError};
+use std::sync::{Arc, Mutex, PoisonError};
 
 use crate::accel::Accel;
-use crate::lights::{Light, LightTree};
+use crate::lights::LightTree;
 use crate::materials::{Bsdf, ShadingFrame};
 use crate::sampling::{pass_sample, Distribution1D};
 use crate::scene::Scene;
@@ -250,7 +250,7 @@ impl Drop for Tally<'_> {
 pub struct Renderer<'a> {
     pub(super) scene: &'a Scene,
     pub(super) accel: &'a Accel,
-    pub(super) light_choice: Distribution1D,
+    pub(super) light_choice: Arc<Distribution1D>,
     /// The scene's light tree, where next-event estimation uses it.
     light_tree: Option<&'a LightTree>,
     pub(super) settings: SppmSettings,
@@ -290,14 +290,13 @@ impl StartMedia {
 impl<'a> Renderer<'a> {
     /// A renderer for `scene`; lights are chosen in proportion to their power.
     pub fn new(scene: &'a Scene, accel: &'a Accel, settings: SppmSettings) -> Self {
-        let light_choice = Distribution1D::new(scene.lights.iter().map(Light::power));
-        Renderer::with_light_choice(scene, accel, light_choice, settings)
+        Renderer::with_light_choice(scene, accel, Arc::clone(&scene.light_choice), settings)
     }
 
     fn with_light_choice(
         scene: &'a Scene,
         accel: &'a Accel,
-        light_choice: Distribution1D,
+        light_choice: Arc<Distribution1D>,
         settings: SppmSettings,
     ) -> Self {
         let mut renderer = Renderer {
@@ -317,7 +316,7 @@ impl<'a> Renderer<'a> {
     /// A renderer for `scene` that chooses lights as `other` does (frames that share photon
     /// paths must choose their lights alike).
     pub fn choosing_lights_as(other: &Renderer, scene: &'a Scene, accel: &'a Accel) -> Self {
-        Renderer::with_light_choice(scene, accel, other.light_choice.clone(), other.settings.clone())
+        Renderer::with_light_choice(scene, accel, Arc::clone(&other.light_choice), other.settings.clone())
     }
 
     /// A light for next-event estimation at `p`, of shading normal `n`, with the probability of
