@@ -17,7 +17,7 @@ use glam::{IVec3, Vec3, Vec3A};
 pub fn offset_origin(p: Vec3, ng: Vec3, direction: Vec3, scale: f32) -> Vec3 {
     const ORIGIN: f32 = 1.0 / 32.0;
     const FLOAT_SCALE: f32 = 1.0 / 65536.0;
-    const INT_SCALE: f32 = 256.0;
+    const INT_SCALE: f32 = 32.0;
     let s = scale.clamp(f32::MIN_POSITIVE, 1.0);
     let n = if ng.dot(direction) < 0.0 { -ng } else { ng };
     let offset = |p: f32, n: f32| {
