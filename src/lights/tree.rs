@@ -210,8 +210,9 @@ pub struct LightTree {
     /// For each light by index: the bits of its path from the root (1: the second child) and
     /// its depth, for lights in the tree.
     paths: Vec<Option<(u64, u32)>>,
-    /// Distant lights by index, with their power, and the tree's as the last entry.
+    /// Distant lights by index.
     distant: Vec<usize>,
+    /// The distant lights and, as the last entry, the tree, by power.
     top: Distribution1D,
 }
 
