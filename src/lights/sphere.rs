@@ -238,17 +238,12 @@ impl SphereLight {
         let (t, b) = basis(axis);
         let local = square_to_cone(u_direction, cone.one_minus_cos);
         let direction = (t * local.x + b * local.y + axis * local.z).normalize();
-        let falloff = spot_falloff(u_direction.x * cone.one_minus_cos, self.beam_falloff(), cone);
+        let falloff = self.falloff(direction);
         EmittedPhoton {
             origin: self.position + self.point_facing(direction, u_position),
             direction,
             flux: self.intensity.eval(lambda) * (falloff * cone.solid_angle()),
         }
-    }
-
-    /// The beam's falloff law (a hard edge at every direction for a point light).
-    fn beam_falloff(&self) -> SpotFalloff {
-        self.beam.map_or(SpotFalloff::Blender { blend: 0.0 }, |beam| beam.falloff)
     }
 
     /// Where on the sphere, about its centre, a photon leaving along `direction` starts.

@@ -90,7 +90,7 @@ pub struct Material {
     /// reflections see it either way).
     pub seen_by_camera: bool,
     /// An area light's surface: every ray passes through it unchanged, as through a surface
-    /// alpha cuts away (Blender's lights cast no shadow and hide nothing behind them).
+    /// alpha cuts away, and it casts no shadow (Blender's lights hide nothing behind them).
     pub light_surface: bool,
 }
 
@@ -320,12 +320,6 @@ impl Material {
     /// closed mesh (not a thin wall).
     pub fn has_inside(&self) -> bool {
         self.transmission > 0.0 && !self.thin
-    }
-
-    /// Whether light passes through unchanged (an area light's surface): such surfaces cast no
-    /// shadow.
-    pub fn is_invisible(&self) -> bool {
-        self.light_surface
     }
 
     /// What a path arriving from `wo` meets at a surface point whose interpolated frame is

@@ -81,7 +81,7 @@ impl Geometry {
     /// lights) cast no shadow.
     pub fn bvh(&self, materials: &[Material]) -> Bvh {
         let casts_shadow: Vec<bool> =
-            self.triangles.iter().map(|t| !materials[t.material as usize].is_invisible()).collect();
+            self.triangles.iter().map(|t| !materials[t.material as usize].light_surface).collect();
         Bvh::build(&self.corners(), &casts_shadow)
     }
 
