@@ -481,6 +481,78 @@ def many_lights_scene():
     set_resolution(320, 240)
 
 
+def emissive_quads(name, quads, materials):
+    """One mesh of quads, each given as (centre, edge a, edge b, material index)."""
+    mesh = bpy.data.meshes.new(name)
+    obj = bpy.data.objects.new(name, mesh)
+    bpy.context.scene.collection.objects.link(obj)
+    for m in materials:
+        mesh.materials.append(m)
+    bm = bmesh.new()
+    for centre, a, b, index in quads:
+        corners = [tuple(c + sx * ea + sy * eb for c, ea, eb in zip(centre, a, b))
+                   for sx, sy in ((-0.5, -0.5), (0.5, -0.5), (0.5, 0.5), (-0.5, 0.5))]
+        face = bm.faces.new([bm.verts.new(c) for c in corners])
+        face.material_index = index
+    bm.to_mesh(mesh)
+    bm.free()
+    return len(quads)
+
+
+def night_city_scene(blocks=7, block_size=6.0, street=4.0):
+    """A city block grid at night seen from above: street lamps facing down along every street
+    and lit windows on the facades, of varied colour and strength (about three thousand small
+    emitters), and a glass sphere on the central square. Each point is lit mostly by the few
+    lamps near it: the light tree's second scene, built but not exported."""
+    import random
+    rng = random.Random(11)
+    reset()
+    pitch = block_size + street
+    extent = blocks * pitch + street
+    plane("Ground", extent + 8, (0, 0, 0), (0, 0, 0), material("Asphalt", (0.25, 0.25, 0.25)))
+    facade = material("Facade", (0.55, 0.5, 0.45))
+    lamps = [material(f"Lamp {s:g}", (0.0, 0.0, 0.0), emission=(1.0, 0.7, 0.4), emission_strength=s)
+             for s in (15.0, 45.0)]
+    windows = [material(f"Window {n} {s:g}", (0.0, 0.0, 0.0), emission=c, emission_strength=s)
+               for n, c in (("Warm", (1.0, 0.75, 0.45)), ("Cool", (0.6, 0.75, 1.0)), ("TV", (0.3, 0.5, 1.0)))
+               for s in (3.0, 12.0)]
+    half = extent / 2
+    lamp_quads, window_quads = [], []
+    down, x_edge, y_edge, z_edge = (0, 0, 1), (0.4, 0, 0), (0, 0.4, 0), (0, 0, 1)
+    for i in range(blocks):
+        for j in range(blocks):
+            if (i, j) == (blocks // 2, blocks // 2):
+                continue  # the square
+            x0, y0 = -half + street + i * pitch, -half + street + j * pitch
+            height = rng.choice((4.0, 7.0, 10.0, 13.0))
+            block(f"Block {i} {j}", (block_size, block_size, height),
+                  (x0 + block_size / 2, y0 + block_size / 2, height / 2), 0.0, facade)
+            for floor in range(int(height / 3)):
+                z = 1.8 + 3.0 * floor
+                for k in range(5):
+                    along = 0.6 + (k + 0.5) * (block_size - 1.2) / 5
+                    for centre, a in (((x0 + along, y0 - 0.01, z), (0.7, 0, 0)),
+                                      ((x0 + along, y0 + block_size + 0.01, z), (-0.7, 0, 0)),
+                                      ((x0 - 0.01, y0 + along, z), (0, -0.7, 0)),
+                                      ((x0 + block_size + 0.01, y0 + along, z), (0, 0.7, 0))):
+                        if rng.random() < 0.6:
+                            window_quads.append((centre, a, (0, 0, 1.0), rng.randrange(len(windows))))
+    for k in range(blocks + 1):
+        road = -half + street / 2 + k * pitch
+        steps = int(extent / 2.5)
+        for s in range(steps):
+            along = -half + (s + 0.5) * extent / steps
+            for side in (-1, 1):
+                across = road + side * 1.6
+                lamp_quads.append(((along, across, 5.0), (0.4, 0, 0), (0, -0.4, 0), rng.randrange(2)))
+                lamp_quads.append(((across, along, 5.0), (0, 0.4, 0), (0.4, 0, 0), rng.randrange(2)))
+    emissive_quads("Lamps", lamp_quads, lamps)
+    emissive_quads("Windows", window_quads, windows)
+    glass_sphere((0, 0, 1.5), 1.5, glass_material())
+    camera((0.0, -half - 4.0, 34.0), (0.0, -4.0, 0.0), lens_mm=24.0)
+    set_resolution(320, 240)
+
+
 def make_many_lights():
     many_lights_scene()
     export("many_lights")

@@ -24,6 +24,8 @@ SCENES = {
     "caustic_10x_triangles": lambda: make_scenes.cornell_glass_scene(sphere_segments=304),
     # A room lit by 2400 small bulbs (the light tree's scene).
     "many_lights": make_scenes.many_lights_scene,
+    # A city block grid at night: street lamps and lit windows (the light tree's second scene).
+    "night_city": make_scenes.night_city_scene,
 }
 
 
