@@ -21,7 +21,9 @@ Writes scenes/<name>.gltf and scenes/<name>.bin:
 - water_glass: a tumbler of blue-green water (a Volume Absorption node, dispersive water) with a
   frosted ice cube floating in it, under a low sun-like light;
 - many_lights: a room lit only by 2400 small coloured bulbs of varied strength strung under its
-  ceiling, with a glass sphere on a table (the light tree's scene).
+  ceiling, with a glass sphere on a table (the light tree's scene);
+- night_city (built for the benchmark, tests/bench/blender_scenes.py, not exported here): a city
+  at night seen from above, 928 street lamps and 1485 lit windows (the light tree's second scene).
 
 Blender's exporter drops area lights and the render resolution, so they travel as `caustic`
 custom properties, which the exporter writes as glTF extras (see docs/extras.md). The gems and the
@@ -501,8 +503,8 @@ def emissive_quads(name, quads, materials):
 
 def night_city_scene(blocks=7, block_size=6.0, street=4.0):
     """A city block grid at night seen from above: street lamps facing down along every street
-    and lit windows on the facades, of varied colour and strength (about three thousand small
-    emitters), and a glass sphere on the central square. Each point is lit mostly by the few
+    and lit windows on the facades, of varied colour and strength (928 lamps and 1485 windows),
+    and a glass sphere on the central square. Each point is lit mostly by the few
     lamps near it: the light tree's second scene, built but not exported."""
     import random
     rng = random.Random(11)
