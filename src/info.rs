@@ -16,6 +16,15 @@ pub fn report(settings: &RenderSettings) -> Result<Value, String> {
     let transparent_film = description.transparent_film;
     let fps = description.fps;
     let projection = description.camera.projection.name();
+    // Each mesh a skin or morph targets shape, once (a mesh's primitives are instances of one name).
+    let mut deforming: Vec<Value> = Vec::new();
+    for mesh in &description.meshes {
+        let Some(deformation) = &mesh.deformation else { continue };
+        let entry = json!({"mesh": mesh.name, "by": deformation.kinds()});
+        if !deforming.contains(&entry) {
+            deforming.push(entry);
+        }
+    }
     let shot = Shot::new(settings, description)?;
     let prepared = shot.prepared();
     let (fixed, moving) = prepared.triangle_counts();
@@ -68,6 +77,7 @@ pub fn report(settings: &RenderSettings) -> Result<Value, String> {
         "needs": needs,
         "reuse_shares": reuse_shares,
         "triangles": {"static": fixed, "moving": moving},
+        "deforming": deforming,
         "skipped": skipped,
     }))
 }

@@ -418,3 +418,73 @@ fn hostile_texture_references_are_named() {
         assert!(text.contains(expected), "no '{expected}' in:\n{text}");
     }
 }
+
+/// Each broken piece of a skin or of morph targets is refused with a message naming it.
+#[test]
+fn hostile_skins_and_morph_targets_are_refused() {
+    let dir = tempfile::tempdir().unwrap();
+    let base = deformed_square();
+    let write = |name: &str, edit: &dyn Fn(&mut Value)| {
+        let mut doc = base.clone();
+        edit(&mut doc);
+        let path = dir.path().join(name);
+        std::fs::write(&path, doc.to_string()).unwrap();
+        path
+    };
+    // The base renders (so each refusal below is its edit's).
+    let out = tempfile::tempdir().unwrap();
+    let output = run_within_a_minute(render_command(&write("whole.gltf", &|_| {}), out.path()));
+    assert!(output.status.success(), "{}", String::from_utf8_lossy(&output.stderr));
+    let skin = |doc: &mut Value| doc["skins"][0].clone();
+    let cases: [(&str, &dyn Fn(&mut Value), &[&str]); 8] = [
+        (
+            "one_joint.gltf",
+            &|d| d["skins"][0] = json!({"joints": [d["skins"][0]["joints"][0]]}),
+            &["Square", "names joint 1", "1 joints"],
+        ),
+        (
+            "no_joints.gltf",
+            &|d| d["skins"][0] = json!({"joints": []}),
+            &["node 'Square': skin 0", "1 to 65535 joints"],
+        ),
+        (
+            "joint_not_a_node.gltf",
+            &|d| d["skins"][0]["joints"] = json!([0, 999]),
+            &["skins[0].joints[1]", "out of bounds"],
+        ),
+        (
+            "bind_matrices_short.gltf",
+            &|d| {
+                let mut s = skin(d);
+                s["joints"] = json!([s["joints"][0], s["joints"][1], s["joints"][1]]);
+                d["skins"][0] = s;
+            },
+            &["node 'Square': skin 0", "expected 3 inverse bind matrices", "found 2"],
+        ),
+        (
+            "no_weights.gltf",
+            &|d| {
+                d["meshes"][1]["primitives"][0]["attributes"].as_object_mut().unwrap().remove("WEIGHTS_0");
+            },
+            &["Square", "JOINTS_0 and WEIGHTS_0"],
+        ),
+        (
+            "weights_for_two_targets.gltf",
+            &|d| d["nodes"][1]["weights"] = json!([0.5, 0.5]),
+            &["Square", "default morph target weights"],
+        ),
+        (
+            "weights_of_a_mesh_without_targets.gltf",
+            &|d| d["animations"][0]["channels"][0]["target"]["node"] = json!(0),
+            &["Floor", "no morph targets"],
+        ),
+        (
+            "weights_keys_short.gltf",
+            &|d| d["animations"][0]["samplers"][0]["interpolation"] = json!("CUBICSPLINE"),
+            &["Square", "need 6 values, found 2"],
+        ),
+    ];
+    for (name, edit, expected) in cases {
+        assert_refused(&write(name, edit), expected);
+    }
+}

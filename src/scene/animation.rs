@@ -98,6 +98,10 @@ pub struct NodeMotion {
     pub rotation: Option<Track>,
     /// Animated scale.
     pub scale: Option<Track>,
+    /// Animated morph target weights: a track per group of four targets.
+    pub weights: Vec<Track>,
+    /// How many morph target weights the tracks animate.
+    pub weight_count: usize,
 }
 
 /// Every node's transform over time.
@@ -131,6 +135,21 @@ impl Rig {
             Some(parent) => self.world(parent, time) * local,
             None => local,
         }
+    }
+
+    /// The morph target weights of `node` at `time` seconds, if an animation sets them.
+    pub fn weights(&self, node: usize, time: f32) -> Option<Vec<f32>> {
+        let n = &self.nodes[node];
+        if n.weights.is_empty() {
+            return None;
+        }
+        let all = n.weights.iter().flat_map(|track| track.sample(time).to_array());
+        Some(all.take(n.weight_count).collect())
+    }
+
+    /// Whether the morph target weights of `node` vary anywhere in [t0, t1] seconds.
+    pub fn weights_vary_within(&self, node: usize, t0: f32, t1: f32) -> bool {
+        self.nodes[node].weights.iter().any(|t| t.varies_within(t0, t1))
     }
 
     /// Whether `node` or any ancestor moves anywhere in [t0, t1] seconds.

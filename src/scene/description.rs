@@ -31,6 +31,8 @@ pub struct MeshInstance {
     pub extras: super::VertexExtras,
     /// Triangles, indexing this instance's vertices.
     pub triangles: Vec<TriangleRef>,
+    /// Its skin and morph targets, if it has either.
+    pub deformation: Option<Box<super::deform::Deformation>>,
 }
 
 /// A punctual light's kind and emission (see `crate::lights` for units).

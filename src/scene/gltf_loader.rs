@@ -1,6 +1,7 @@
 //! glTF 2.0 as Blender 5.0's exporter writes it, plus the `caustic` extras, into a
-//! [`Description`]: meshes in their nodes' local space and the node rig with its animation
-//! (translation, rotation, scale; `KHR_animation_pointer` cannot be read by the gltf crate).
+//! [`Description`]: meshes in their nodes' local space with their skins and morph targets, and
+//! the node rig with its animation (translation, rotation, scale and morph target weights;
+//! `KHR_animation_pointer` cannot be read by the gltf crate).
 //!
 //! Reads the default scene's node tree (nested transforms), triangle meshes with normals,
 //! texture coordinates (sets 0 and 1), vertex colours and tangents (generated where a normal map
@@ -11,9 +12,12 @@
 
 use std::path::Path;
 
+use std::sync::Arc;
+
+use super::deform::{self, Deformation, Morph, MorphTarget, Skin, Skinning};
 use super::{gltf_checks, gltf_unrendered};
 
-use glam::{Quat, Vec2, Vec3, Vec4};
+use glam::{Mat4, Quat, Vec2, Vec3, Vec4};
 use gltf::animation::util::ReadOutputs;
 use gltf::animation::Property;
 use gltf::khr_lights_punctual::Kind;
@@ -49,6 +53,8 @@ struct Builder<'a> {
     thin_materials: std::collections::HashMap<u32, u32>,
     /// The holdout copy of each material that has one.
     holdout_materials: std::collections::HashMap<u32, u32>,
+    /// The skins read so far, by index.
+    skins: std::collections::HashMap<usize, Arc<Skin>>,
 }
 
 /// Loads `path` into a [`Description`].
@@ -94,6 +100,7 @@ pub fn load(path: &Path) -> Result<Description, SceneError> {
         material_offset,
         thin_materials: Default::default(),
         holdout_materials: Default::default(),
+        skins: Default::default(),
     };
     for node in gltf_scene.nodes() {
         builder.visit(&node, &rig).map_err(fail)?;
@@ -169,49 +176,83 @@ fn rig(document: &gltf::Document, buffers: &[gltf::buffer::Data]) -> Result<Rig,
     for animation in document.animations() {
         for channel in animation.channels() {
             let target = channel.target();
-            let name = target.node().name().unwrap_or("unnamed").to_string();
-            let reader = channel.reader(|b| buffers.get(b.index()).map(|d| &d.0[..]));
-            let times: Vec<f32> =
-                reader.read_inputs().ok_or(format!("animation of node '{name}': no key times"))?.collect();
-            let interpolation = match channel.sampler().interpolation() {
-                gltf::animation::Interpolation::Step => Interpolation::Step,
-                gltf::animation::Interpolation::Linear => Interpolation::Linear,
-                gltf::animation::Interpolation::CubicSpline => Interpolation::CubicSpline,
-            };
-            let (values, is_rotation): (Vec<Vec4>, bool) = match reader.read_outputs() {
-                Some(ReadOutputs::Translations(v)) | Some(ReadOutputs::Scales(v)) => {
-                    (v.map(|v| Vec3::from(v).extend(0.0)).collect(), false)
-                }
-                Some(ReadOutputs::Rotations(r)) => (r.into_f32().map(Vec4::from).collect(), true),
-                Some(ReadOutputs::MorphTargetWeights(_)) => continue,
-                None => return Err(format!("animation of node '{name}': no key values")),
-            };
-            if !times.iter().all(|t| t.is_finite()) || !values.iter().all(|v| v.is_finite()) {
-                return Err(format!(
-                    "animation of node '{name}': key times or values are not finite numbers"
-                ));
-            }
-            let per_key = if interpolation == Interpolation::CubicSpline { 3 } else { 1 };
-            let sorted = times.windows(2).all(|w| w[0] < w[1]);
-            if times.is_empty() || values.len() != per_key * times.len() || !sorted {
-                return Err(format!(
-                    "animation of node '{name}': {} key times (increasing) need {} values, found {}",
-                    times.len(),
-                    per_key * times.len(),
-                    values.len()
-                ));
-            }
-            let track = Some(Track { times, values, interpolation, is_rotation });
+            let (mut tracks, weight_count) = channel_tracks(&channel, buffers)?;
             let motion = &mut nodes[target.node().index()];
             match target.property() {
-                Property::Translation => motion.translation = track,
-                Property::Rotation => motion.rotation = track,
-                Property::Scale => motion.scale = track,
-                Property::MorphTargetWeights => {}
+                Property::Translation => motion.translation = tracks.pop(),
+                Property::Rotation => motion.rotation = tracks.pop(),
+                Property::Scale => motion.scale = tracks.pop(),
+                Property::MorphTargetWeights => {
+                    motion.weights = tracks;
+                    motion.weight_count = weight_count;
+                }
             }
         }
     }
     Ok(Rig { nodes })
+}
+
+/// The tracks an animation channel sets: one for a translation, rotation or scale; one per four
+/// targets for morph target weights, with the number of targets.
+fn channel_tracks(
+    channel: &gltf::animation::Channel,
+    buffers: &[gltf::buffer::Data],
+) -> Result<(Vec<Track>, usize), String> {
+    let target = channel.target();
+    let name = target.node().name().unwrap_or("unnamed").to_string();
+    let reader = channel.reader(|b| buffers.get(b.index()).map(|d| &d.0[..]));
+    let times: Vec<f32> =
+        reader.read_inputs().ok_or(format!("animation of node '{name}': no key times"))?.collect();
+    let interpolation = match channel.sampler().interpolation() {
+        gltf::animation::Interpolation::Step => Interpolation::Step,
+        gltf::animation::Interpolation::Linear => Interpolation::Linear,
+        gltf::animation::Interpolation::CubicSpline => Interpolation::CubicSpline,
+    };
+    let per_key = if interpolation == Interpolation::CubicSpline { 3 } else { 1 };
+    let sorted = times.windows(2).all(|w| w[0] < w[1]);
+    let entries = per_key * times.len();
+    let count_error = |found: usize, each: usize| {
+        format!(
+            "animation of node '{name}': {} key times (increasing) need {} values, found {found}",
+            times.len(),
+            entries * each
+        )
+    };
+    let (values, is_rotation, weight_count): (Vec<Vec<Vec4>>, bool, usize) = match reader.read_outputs() {
+        Some(ReadOutputs::Translations(v)) | Some(ReadOutputs::Scales(v)) => {
+            (vec![v.map(|v| Vec3::from(v).extend(0.0)).collect()], false, 0)
+        }
+        Some(ReadOutputs::Rotations(r)) => (vec![r.into_f32().map(Vec4::from).collect()], true, 0),
+        Some(ReadOutputs::MorphTargetWeights(w)) => {
+            let flat: Vec<f32> = w.into_f32().collect();
+            let count = morph_target_count(&target.node());
+            if count == 0 {
+                return Err(format!(
+                    "animation of node '{name}': it animates morph target weights, but the node's mesh has no morph targets"
+                ));
+            }
+            if flat.len() != entries * count {
+                return Err(count_error(flat.len(), count));
+            }
+            (deform::weight_groups(&flat, count), false, count)
+        }
+        None => return Err(format!("animation of node '{name}': no key values")),
+    };
+    if !times.iter().all(|t| t.is_finite()) || !values.iter().flatten().all(|v| v.is_finite()) {
+        return Err(format!("animation of node '{name}': key times or values are not finite numbers"));
+    }
+    if times.is_empty() || values.iter().any(|v| v.len() != entries) || !sorted {
+        return Err(count_error(values.first().map_or(0, Vec::len), 1));
+    }
+    let tracks =
+        values.into_iter().map(|values| Track { times: times.clone(), values, interpolation, is_rotation });
+    Ok((tracks.collect(), weight_count))
+}
+
+/// How many morph targets the mesh on `node` has (glTF asks every primitive for the same number).
+fn morph_target_count(node: &gltf::Node) -> usize {
+    let primitives = node.mesh().into_iter().flat_map(|m| m.primitives().collect::<Vec<_>>());
+    primitives.map(|p| p.morph_targets().len()).max().unwrap_or(0)
 }
 
 /// The shutter in frames relative to the frame, from Blender's length and position.
@@ -311,9 +352,8 @@ impl Builder<'_> {
             extras::parse(node.extras()).map_err(|e| format!("node '{name}' extras `caustic`: {e}"))?;
         self.warnings.extend(gltf_unrendered::node_warnings(node));
         if let Some(mesh) = node.mesh() {
-            self.warnings.extend(gltf_unrendered::mesh_warnings(&mesh));
             let first_instance = self.meshes.len();
-            self.add_mesh(&mesh, node.index())?;
+            self.add_mesh(&mesh, node)?;
             if extras.holdout {
                 self.hold_out(first_instance);
             }
@@ -511,13 +551,15 @@ impl Builder<'_> {
             extras: Default::default(),
             positions,
             triangles,
+            deformation: None,
         });
     }
 
-    fn add_mesh(&mut self, mesh: &gltf::Mesh, node: usize) -> Result<(), String> {
+    fn add_mesh(&mut self, mesh: &gltf::Mesh, node: &gltf::Node) -> Result<(), String> {
         let name = mesh.name().unwrap_or("unnamed");
         let first = self.meshes.len();
-        self.add_primitives(mesh, node, name)?;
+        let skin = node.skin().map(|skin| self.skin(&skin, node.name().unwrap_or("unnamed"))).transpose()?;
+        self.add_primitives(mesh, node, skin, name)?;
         self.thin_walls_of_open_glass(first, name);
         Ok(())
     }
@@ -583,8 +625,46 @@ impl Builder<'_> {
         thin
     }
 
-    /// Adds each triangle primitive of `mesh` as a mesh instance of `node`.
-    fn add_primitives(&mut self, mesh: &gltf::Mesh, node: usize, name: &str) -> Result<(), String> {
+    /// The skin `skin` of node `node` (read once, shared by every mesh it deforms).
+    fn skin(&mut self, skin: &gltf::Skin, node: &str) -> Result<Arc<Skin>, String> {
+        if let Some(read) = self.skins.get(&skin.index()) {
+            return Ok(Arc::clone(read));
+        }
+        let name = format!("node '{node}': skin {} ('{}')", skin.index(), skin.name().unwrap_or("unnamed"));
+        let joints: Vec<usize> = skin.joints().map(|j| j.index()).collect();
+        let reader = skin.reader(|b| self.buffers.get(b.index()).map(|d| &d.0[..]));
+        let inverse_bind: Vec<Mat4> = match reader.read_inverse_bind_matrices() {
+            Some(matrices) => matrices.map(|m| Mat4::from_cols_array_2d(&m)).collect(),
+            None => vec![Mat4::IDENTITY; joints.len()],
+        };
+        if joints.is_empty() || joints.len() > usize::from(u16::MAX) {
+            return Err(format!("{name}: expected 1 to 65535 joints, found {}", joints.len()));
+        }
+        if inverse_bind.len() != joints.len() {
+            return Err(format!(
+                "{name}: expected {} inverse bind matrices (one per joint), found {}",
+                joints.len(),
+                inverse_bind.len()
+            ));
+        }
+        if !inverse_bind.iter().all(|m| m.is_finite()) {
+            return Err(format!("{name}: its inverse bind matrices have values that are not finite numbers"));
+        }
+        let read = Arc::new(Skin { joints, inverse_bind });
+        self.skins.insert(skin.index(), Arc::clone(&read));
+        Ok(read)
+    }
+
+    /// Adds each triangle primitive of `mesh` as a mesh instance of `node` (deformed by `skin`
+    /// and its morph targets, if any).
+    fn add_primitives(
+        &mut self,
+        mesh: &gltf::Mesh,
+        gltf_node: &gltf::Node,
+        skin: Option<Arc<Skin>>,
+        name: &str,
+    ) -> Result<(), String> {
+        let node = gltf_node.index();
         for primitive in mesh.primitives() {
             if primitive.mode() != gltf::mesh::Mode::Triangles {
                 self.warnings.push(format!(
@@ -639,8 +719,18 @@ impl Builder<'_> {
                     "mesh '{name}': skipped {skipped} degenerate triangles (zero area or non-finite coordinates)"
                 ));
             }
-            let mesh =
-                MeshInstance { node, name: name.to_string(), positions, normals, uvs, extras, triangles };
+            let default_weights = gltf_node.weights().or(mesh.weights());
+            let deformation = deformation(&reader, skin.clone(), default_weights, count, name)?;
+            let mesh = MeshInstance {
+                node,
+                name: name.to_string(),
+                positions,
+                normals,
+                uvs,
+                extras,
+                triangles,
+                deformation,
+            };
             let mesh = self.with_tangents(mesh, material);
             self.meshes.push(mesh);
         }
@@ -665,6 +755,123 @@ impl Builder<'_> {
             }
         }
     }
+}
+
+/// The skin and morph targets of a primitive of `count` vertices, if it has either: `skin` is
+/// its node's; `default_weights` the node's or the mesh's `weights`.
+fn deformation<'a, 's, F>(
+    reader: &gltf::mesh::Reader<'a, 's, F>,
+    skin: Option<Arc<Skin>>,
+    default_weights: Option<&[f32]>,
+    count: usize,
+    name: &str,
+) -> Result<Option<Box<Deformation>>, String>
+where
+    F: Clone + Fn(gltf::Buffer<'a>) -> Option<&'s [u8]>,
+{
+    let skin = skin.map(|skin| skinning(reader, skin, count, name)).transpose()?;
+    let targets = morph_targets(reader, count, name)?;
+    let morph = match targets.is_empty() {
+        true => None,
+        false => {
+            let weights = default_weights.map_or_else(|| vec![0.0; targets.len()], <[f32]>::to_vec);
+            if weights.len() != targets.len() || !weights.iter().all(|w| w.is_finite()) {
+                return Err(format!(
+                    "mesh '{name}': expected {} finite default morph target weights, found {:?}",
+                    targets.len(),
+                    weights
+                ));
+            }
+            Some(Morph { targets, weights })
+        }
+    };
+    Ok((skin.is_some() || morph.is_some()).then(|| Box::new(Deformation { skin, morph })))
+}
+
+/// How the `count` vertices of a primitive hang from `skin`: every `JOINTS_n`/`WEIGHTS_n` set,
+/// weights normalised to sum to one (the specification asks files for that; exporters round).
+fn skinning<'a, 's, F>(
+    reader: &gltf::mesh::Reader<'a, 's, F>,
+    skin: Arc<Skin>,
+    count: usize,
+    name: &str,
+) -> Result<Skinning, String>
+where
+    F: Clone + Fn(gltf::Buffer<'a>) -> Option<&'s [u8]>,
+{
+    let mut sets: Vec<(Vec<[u16; 4]>, Vec<[f32; 4]>)> = Vec::new();
+    while let (Some(joints), Some(weights)) =
+        (reader.read_joints(sets.len() as u32), reader.read_weights(sets.len() as u32))
+    {
+        let set = sets.len();
+        let (joints, weights): (Vec<[u16; 4]>, Vec<[f32; 4]>) =
+            (joints.into_u16().collect(), weights.into_f32().collect());
+        if joints.len() != count || weights.len() != count {
+            return Err(format!(
+                "mesh '{name}': JOINTS_{set} and WEIGHTS_{set} need {count} entries (one per vertex), found {} and {}",
+                joints.len(),
+                weights.len()
+            ));
+        }
+        if let Some(bad) = joints.iter().flatten().find(|&&j| usize::from(j) >= skin.joints.len()) {
+            return Err(format!(
+                "mesh '{name}': JOINTS_{set} names joint {bad}, but its skin has {} joints",
+                skin.joints.len()
+            ));
+        }
+        if !weights.iter().flatten().all(|w| w.is_finite() && *w >= 0.0) {
+            return Err(format!(
+                "mesh '{name}': WEIGHTS_{set} has weights that are negative or not finite numbers"
+            ));
+        }
+        sets.push((joints, weights));
+    }
+    if sets.is_empty() {
+        return Err(format!("mesh '{name}': its node has a skin, but it has no JOINTS_0 and WEIGHTS_0"));
+    }
+    let per_vertex = 4 * sets.len();
+    let mut joints = Vec::with_capacity(per_vertex * count);
+    let mut weights = Vec::with_capacity(per_vertex * count);
+    for v in 0..count {
+        let influences: Vec<(u16, f32)> = sets.iter().flat_map(|(j, w)| j[v].into_iter().zip(w[v])).collect();
+        let sum: f32 = influences.iter().map(|(_, w)| w).sum();
+        let scale = if sum > 0.0 { sum.recip() } else { 0.0 };
+        joints.extend(influences.iter().map(|(j, _)| j));
+        weights.extend(influences.iter().map(|(_, w)| w * scale));
+    }
+    Ok(Skinning { skin, per_vertex, joints, weights })
+}
+
+/// The morph targets of a primitive of `count` vertices (refused where an offset list has
+/// another length or values that are not finite).
+fn morph_targets<'a, 's, F>(
+    reader: &gltf::mesh::Reader<'a, 's, F>,
+    count: usize,
+    name: &str,
+) -> Result<Vec<MorphTarget>, String>
+where
+    F: Clone + Fn(gltf::Buffer<'a>) -> Option<&'s [u8]>,
+{
+    let read = |offsets: Option<gltf::accessor::Iter<'s, [f32; 3]>>| -> Vec<Vec3> {
+        offsets.map(|o| o.map(Vec3::from).collect()).unwrap_or_default()
+    };
+    let mut targets = Vec::new();
+    for (k, (positions, normals, tangents)) in reader.read_morph_targets().enumerate() {
+        let target =
+            MorphTarget { positions: read(positions), normals: read(normals), tangents: read(tangents) };
+        for (what, offsets) in
+            [("POSITION", &target.positions), ("NORMAL", &target.normals), ("TANGENT", &target.tangents)]
+        {
+            if !offsets.is_empty() && (offsets.len() != count || !offsets.iter().all(|o| o.is_finite())) {
+                return Err(format!(
+                    "mesh '{name}': morph target {k}'s {what} offsets need {count} finite entries, found {}",
+                    offsets.len()
+                ));
+            }
+        }
+        targets.push(target);
+    }
+    Ok(targets)
 }
 
 /// `TEXCOORD_1`, `COLOR_0` (fitted to reflectance spectra) and `TANGENT` of a primitive of

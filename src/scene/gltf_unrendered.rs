@@ -88,27 +88,12 @@ fn unrendered_textures(m: &gltf::Material) -> Vec<String> {
         .collect()
 }
 
-/// One line for each thing in mesh `mesh` that is not rendered.
-pub fn mesh_warnings(mesh: &gltf::Mesh) -> Vec<String> {
-    let name = mesh.name().unwrap_or("unnamed");
-    let primitives: Vec<_> = mesh.primitives().collect();
-    let has = |f: &dyn Fn(&gltf::Primitive) -> bool| primitives.iter().any(f);
-    let mut unrendered: Vec<String> = Vec::new();
-    if has(&|p| p.morph_targets().next().is_some()) {
-        unrendered.push("morph targets (shape keys) are not rendered: the mesh keeps its basis shape".into());
-    }
-    unrendered.into_iter().map(|what| format!("mesh '{name}': {what}")).collect()
-}
-
 /// One line for each thing on node `node` that is not rendered.
 pub fn node_warnings(node: &gltf::Node) -> Vec<String> {
     let name = node.name().unwrap_or("unnamed");
-    let mut unrendered = Vec::new();
-    if node.skin().is_some() {
-        unrendered.push("its skin is not rendered: the mesh stays in its rest pose".to_string());
-    }
+    let mut unrendered: Vec<&str> = Vec::new();
     if node.extension_value("EXT_mesh_gpu_instancing").is_some() {
-        unrendered.push("EXT_mesh_gpu_instancing is not rendered: one instance is drawn".into());
+        unrendered.push("EXT_mesh_gpu_instancing is not rendered: one instance is drawn");
     }
     unrendered.into_iter().map(|what| format!("node '{name}': {what}")).collect()
 }

@@ -8,6 +8,7 @@
 
 pub mod animation;
 mod attributes;
+pub mod deform;
 pub mod description;
 mod edges;
 pub mod extras;

@@ -2,13 +2,15 @@
 //! time (DESIGN.md: static geometry is built once per range; moving objects per time).
 //!
 //! A mesh, light or camera is moving over a range when its node or an ancestor has a track whose
-//! value changes within it; everything else is flattened to world space once and shared (`Arc`)
+//! value changes within it (a mesh also when a joint of its skin moves or its morph target weights
+//! vary: [`super::deform`]); everything else is flattened to world space once and shared (`Arc`)
 //! by every pose. A scene with nothing moving is posed once and never again.
 
 use std::sync::Arc;
 
 use glam::{Mat3, Mat4, Vec3};
 
+use super::deform::{self, Deformation};
 use super::description::{Description, Lens, LensSettings, MeshInstance, PunctualKind, PunctualLight};
 use super::{
     bounding_sphere, Geometry, OpenEdges, OpenSides, Scene, TriangleRef, DEFAULT_RADIUS_FRACTION, NOT_A_LIGHT,
@@ -74,12 +76,12 @@ fn flatten(mesh: &MeshInstance, world: Mat4, out: &mut Geometry) {
     }));
 }
 
-/// `meshes` of `description` flattened in their pose at `time`.
+/// `meshes` of `description` flattened in their pose (and shape) at `time`.
 fn flatten_at(description: &Description, meshes: &[usize], time: f32) -> Geometry {
     let mut out = Geometry::default();
     for &m in meshes {
-        let mesh = &description.meshes[m];
-        flatten(mesh, description.rig.world(mesh.node, time), &mut out);
+        let (mesh, world) = deform::posed(&description.meshes[m], &description.rig, time);
+        flatten(&mesh, world, &mut out);
     }
     out
 }
@@ -145,18 +147,23 @@ fn punctual(light: &PunctualLight, world: Mat4) -> Light {
 /// Times at which moving meshes are posed to bound their sweep over a range.
 const SWEEP_SAMPLES: usize = 64;
 
+/// Times at which deforming meshes are posed, vertex by vertex, to bound their sweep.
+const DEFORMED_SWEEP_SAMPLES: usize = 16;
+
 /// A box around `mesh` posed anywhere in `range`: its local box's corners posed at
-/// [`SWEEP_SAMPLES`] + 1 times, grown by a tenth of its diagonal for what turns between them.
+/// [`SWEEP_SAMPLES`] + 1 times (a deforming mesh's vertices at [`DEFORMED_SWEEP_SAMPLES`] + 1),
+/// grown by a tenth of its diagonal for what turns between them.
 fn swept_bounds(description: &Description, mesh: &MeshInstance, range: TimeRange) -> Option<(Vec3, Vec3)> {
     let first = *mesh.positions.first()?;
     let (lo, hi) = mesh.positions.iter().fold((first, first), |(lo, hi), &p| (lo.min(p), hi.max(p)));
     let corners: Vec<Vec3> =
         (0..8).map(|k| Vec3::select(glam::BVec3::new(k & 1 != 0, k & 2 != 0, k & 4 != 0), hi, lo)).collect();
-    let times = (0..=SWEEP_SAMPLES)
-        .map(|i| range.start + (range.end - range.start) * i as f32 / SWEEP_SAMPLES as f32);
-    let posed = times.flat_map(|t| {
-        let world = description.rig.world(mesh.node, t);
-        corners.iter().map(move |&c| world.transform_point3(c))
+    let samples = if mesh.deformation.is_some() { DEFORMED_SWEEP_SAMPLES } else { SWEEP_SAMPLES };
+    let times = (0..=samples).map(|i| range.start + (range.end - range.start) * i as f32 / samples as f32);
+    let posed = times.flat_map(|t| -> Vec<Vec3> {
+        let (shaped, world) = deform::posed(mesh, &description.rig, t);
+        let points = if mesh.deformation.is_some() { &shaped.positions } else { &corners };
+        points.iter().map(|&c| world.transform_point3(c)).collect()
     });
     let (lo, hi) = posed.map(|p| (p, p)).reduce(|(a, b), (c, d)| (a.min(c), b.max(d)))?;
     let margin = Vec3::splat((hi - lo).length() * 0.1);
@@ -186,8 +193,12 @@ impl Prepared {
     pub fn with_lens(description: Arc<Description>, range: TimeRange, lens: Option<Lens>) -> Self {
         let rig = &description.rig;
         let moves = |node: usize| rig.moves_within(node, range.start, range.end);
+        let mesh_moves = |mesh: &MeshInstance| {
+            let changes = |d: &Deformation| d.changes_within(rig, mesh.node, range.start, range.end);
+            moves(mesh.node) || mesh.deformation.as_deref().is_some_and(changes)
+        };
         let (moving_meshes, fixed_meshes): (Vec<usize>, Vec<usize>) =
-            (0..description.meshes.len()).partition(|&m| moves(description.meshes[m].node));
+            (0..description.meshes.len()).partition(|&m| mesh_moves(&description.meshes[m]));
         let (moving_lights, fixed_punctual): (Vec<usize>, Vec<usize>) =
             (0..description.lights.len()).partition(|&l| moves(description.lights[l].node));
         let fixed = flatten_at(&description, &fixed_meshes, range.start);

@@ -87,5 +87,6 @@ pub fn with_generated_tangents(mesh: &MeshInstance, set: usize) -> Option<MeshIn
         uvs: pick(&mesh.uvs),
         extras,
         triangles,
+        deformation: mesh.deformation.as_ref().map(|d| Box::new(d.picked(&order))),
     })
 }

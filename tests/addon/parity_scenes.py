@@ -34,7 +34,7 @@ def interior(index, value):
 
 def clear():
     for blocks in (bpy.data.objects, bpy.data.meshes, bpy.data.materials, bpy.data.lights, bpy.data.cameras,
-                   bpy.data.images, bpy.data.worlds, bpy.data.collections):
+                   bpy.data.images, bpy.data.worlds, bpy.data.collections, bpy.data.armatures, bpy.data.actions):
         for block in list(blocks):
             blocks.remove(block)
     scene = bpy.context.scene
@@ -641,13 +641,56 @@ def sky():
     return {"Floor": 1, "Grey": 2, "White": 3, "Sky": 0}
 
 
+def rigged():
+    """A column bent by a two-bone armature and a box raised by a shape key, both animated and
+    seen at a frame between their keys, as black silhouettes against a white world (64 x 48)."""
+    scene = silhouettes((64, 48))
+    for obj in list(bpy.data.objects):
+        bpy.data.objects.remove(obj)
+    black = bpy.data.materials["Black"]
+    column = add(bpy.ops.mesh.primitive_cylinder_add, black, index=1, vertices=16, radius=0.2, depth=2.0,
+                 location=(-0.8, 0.0, 1.0))
+    bpy.ops.object.mode_set(mode='EDIT')
+    bpy.ops.mesh.select_all(action='SELECT')
+    bpy.ops.mesh.subdivide(number_cuts=8)
+    bpy.ops.object.mode_set(mode='OBJECT')
+    rig = add(bpy.ops.object.armature_add, location=(-0.8, 0.0, 0.0))
+    bpy.ops.object.mode_set(mode='EDIT')
+    lower = rig.data.edit_bones[0]
+    lower.head, lower.tail = (0, 0, 0), (0, 0, 1)
+    upper = rig.data.edit_bones.new("Upper")
+    upper.head, upper.tail, upper.parent = (0, 0, 1), (0, 0, 2), lower
+    bpy.ops.object.mode_set(mode='OBJECT')
+    column.select_set(True)
+    bpy.context.view_layer.objects.active = rig
+    bpy.ops.object.parent_set(type='ARMATURE_AUTO')
+    bend = rig.pose.bones["Upper"]
+    bend.rotation_mode = 'XYZ'
+    for frame, angle in ((1, 0.0), (9, 80.0)):
+        bend.rotation_euler = (math.radians(angle), 0.0, math.radians(angle) / 2)
+        bend.keyframe_insert("rotation_euler", frame=frame)
+    box = add(bpy.ops.mesh.primitive_cube_add, black, index=2, size=0.8, location=(1.0, 0.5, 0.4))
+    box.shape_key_add(name="Basis")
+    tall = box.shape_key_add(name="Tall")
+    for point in tall.data:
+        point.co.z += 1.2 if point.co.z > 0 else 0.0
+        point.co.x += 0.6 if point.co.z > 0 else 0.0
+    for frame, value in ((1, 0.0), (9, 1.0)):
+        tall.value = value
+        tall.keyframe_insert("value", frame=frame)
+    scene.frame_start, scene.frame_end = 1, 9
+    scene.frame_set(5)
+    camera((5.0, -7.0, 3.0), (0.0, 0.0, 1.0))
+    return {"World": 0}
+
+
 # Scenes whose alpha (a transparent film, holdouts) must match Cycles': a mean absolute difference
 # under 0.02 over the image and no pixel's over 0.25 (noise is under 0.1 at these sample counts;
 # an object that should not render shows).
 ALPHA = {"film_and_holdouts"}
 
 # Scenes whose dark silhouettes (pixels under half the world's brightness) must match Cycles' within a pixel.
-SILHOUETTES = {"ortho_camera", "shifted_camera", "panorama_camera"}
+SILHOUETTES = {"ortho_camera", "shifted_camera", "panorama_camera", "rigged"}
 
 # The scenes compared at a wider tolerance than 5% (their references are noisier: caustics).
 TOLERANCES = {"glass": 0.07}
@@ -669,4 +712,4 @@ SCENES = {"glass": glass, "principled_spheres": principled_spheres, "textured": 
           "hdri": hdri, "ortho_camera": ortho_camera, "shifted_camera": shifted_camera,
           "panorama_camera": panorama_camera, "film_and_holdouts": film_and_holdouts,
           "spot_light": spot_light, "soft_spot": soft_spot, "sky": sky, "lights_seen": lights_seen,
-          "spread_light": spread_light, "soft_falloff": soft_falloff}
+          "spread_light": spread_light, "soft_falloff": soft_falloff, "rigged": rigged}

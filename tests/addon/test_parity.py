@@ -206,6 +206,9 @@ class Parity(unittest.TestCase):
     def test_normal_mapped(self):
         self.check("normal_mapped")
 
+    def test_rigged(self):
+        self.check("rigged")
+
 
 if __name__ == "__main__":
     enable_addon(BINARY)

@@ -109,6 +109,7 @@ pub struct GltfBuilder {
     lights: Vec<Value>,
     images: Vec<Value>,
     animations: Vec<Value>,
+    skins: Vec<Value>,
     scene_extras: Option<Value>,
 }
 
@@ -142,6 +143,84 @@ impl GltfBuilder {
         }
         self.accessors.push(accessor);
         self.accessors.len() - 1
+    }
+
+    /// Adds an accessor of unsigned shorts (glTF component type 5123).
+    fn add_u16_accessor(&mut self, data: &[u16], components: usize, kind: &str) -> usize {
+        let offset = self.buffer.len();
+        for v in data {
+            self.buffer.extend_from_slice(&v.to_le_bytes());
+        }
+        // Accessors of floats that follow stay aligned to four bytes.
+        self.buffer.resize(self.buffer.len().div_ceil(4) * 4, 0);
+        self.buffer_views.push(json!({"buffer": 0, "byteOffset": offset, "byteLength": data.len() * 2}));
+        let count = data.len() / components;
+        self.accessors.push(json!({"bufferView": self.buffer_views.len() - 1, "componentType": 5123, "count": count, "type": kind}));
+        self.accessors.len() - 1
+    }
+
+    /// Sets the translation of `node`.
+    pub fn set_node_translation(&mut self, node: usize, translation: [f32; 3]) {
+        self.nodes[node]["translation"] = json!(translation);
+    }
+
+    /// Sets the default morph target weights of `node`.
+    pub fn set_node_weights(&mut self, node: usize, weights: &[f32]) {
+        self.nodes[node]["weights"] = json!(weights);
+    }
+
+    /// Adds a node (a glTF node object) and returns its index.
+    pub fn node(&mut self, node: Value) -> usize {
+        self.nodes.push(node);
+        self.nodes.len() - 1
+    }
+
+    /// Gives `node` the skin of `joints` (nodes) with `inverse_bind` matrices (column-major, one
+    /// per joint; none: identities), and the last mesh's primitive `JOINTS_0` and `WEIGHTS_0`
+    /// (four per vertex).
+    pub fn skin(
+        &mut self,
+        node: usize,
+        joints: &[usize],
+        inverse_bind: Option<&[[f32; 16]]>,
+        vertex_joints: &[u16],
+        weights: &[f32],
+    ) {
+        let mut skin = json!({"joints": joints});
+        if let Some(matrices) = inverse_bind {
+            let flat: Vec<f32> = matrices.iter().flatten().copied().collect();
+            skin["inverseBindMatrices"] = json!(self.add_accessor(&flat, 16, "MAT4"));
+        }
+        self.skins.push(skin);
+        self.nodes[node]["skin"] = json!(self.skins.len() - 1);
+        let joints = self.add_u16_accessor(vertex_joints, 4, "VEC4");
+        let weights = self.add_accessor(weights, 4, "VEC4");
+        let primitive = &mut self.meshes.last_mut().unwrap()["primitives"][0];
+        primitive["attributes"]["JOINTS_0"] = json!(joints);
+        primitive["attributes"]["WEIGHTS_0"] = json!(weights);
+    }
+
+    /// Adds a morph target of position offsets (three per vertex) to the last mesh's primitive.
+    pub fn morph_target(&mut self, offsets: &[f32]) {
+        let accessor = self.add_accessor(offsets, 3, "VEC3");
+        let primitive = &mut self.meshes.last_mut().unwrap()["primitives"][0];
+        match primitive["targets"].as_array_mut() {
+            Some(targets) => targets.push(json!({"POSITION": accessor})),
+            None => primitive["targets"] = json!([{"POSITION": accessor}]),
+        }
+    }
+
+    /// Animates the morph target weights of `node` with keys at `times` and `weights` (every
+    /// target's weight at each key, key after key), interpolated linearly.
+    pub fn animate_weights(&mut self, node: usize, times: &[f32], weights: &[f32]) {
+        let input = self.add_accessor(times, 1, "SCALAR");
+        self.accessors[input]["min"] = json!([times[0]]);
+        self.accessors[input]["max"] = json!([times[times.len() - 1]]);
+        let output = self.add_accessor(weights, 1, "SCALAR");
+        self.animations.push(json!({
+            "channels": [{"sampler": 0, "target": {"node": node, "path": "weights"}}],
+            "samplers": [{"input": input, "output": output, "interpolation": "LINEAR"}]
+        }));
     }
 
     /// Adds a material (a glTF material object) and returns its index.
@@ -339,6 +418,9 @@ impl GltfBuilder {
         if !self.animations.is_empty() {
             doc["animations"] = json!(self.animations);
         }
+        if !self.skins.is_empty() {
+            doc["skins"] = json!(self.skins);
+        }
         if !self.images.is_empty() {
             doc["images"] = json!(self.images);
             doc["textures"] = json!((0..self.images.len()).map(|i| json!({"source": i})).collect::<Vec<_>>());
@@ -378,6 +460,42 @@ impl GltfBuilder {
         std::fs::write(&path, serde_json::to_string_pretty(&self.to_json()).unwrap()).unwrap();
         path
     }
+}
+
+/// A lit floor and a skinned square (two joints, one animated) with a morph target whose weight
+/// is animated: the hostile-input suite breaks it one piece at a time and the fuzzer mutates it.
+pub fn deformed_square() -> Value {
+    let mut gltf = GltfBuilder::default();
+    let white = gltf.material(diffuse([0.8, 0.8, 0.8]));
+    gltf.quad_y("Floor", 0.0, 2.0, true, white);
+    let square = [
+        [[-0.2, 0.1, -0.2], [0.2, 0.1, -0.2], [0.2, 0.1, 0.2]],
+        [[-0.2, 0.1, -0.2], [0.2, 0.1, 0.2], [-0.2, 0.1, 0.2]],
+    ];
+    gltf.mesh("Square", &square, white);
+    let mesh_node = gltf.last_node();
+    gltf.morph_target(&[0.0, 0.5, 0.0].repeat(6));
+    gltf.animate_weights(mesh_node, &[0.0, 1.0], &[0.0, 1.0]);
+    let bone = gltf.node(json!({"name": "Bone"}));
+    gltf.animate(
+        bone,
+        "rotation",
+        &[0.0, 1.0],
+        &[vec![0.0, 0.0, 0.0, 1.0], vec![0.0, 0.383, 0.0, 0.924]],
+        "LINEAR",
+    );
+    let root = gltf.node(json!({"name": "Root"}));
+    let identity = glam::Mat4::IDENTITY.to_cols_array();
+    gltf.skin(
+        mesh_node,
+        &[bone, root],
+        Some(&[identity, identity]),
+        &[0u16, 1, 0, 0].repeat(6),
+        &[0.7f32, 0.3, 0.0, 0.0].repeat(6),
+    );
+    gltf.light(json!({"type": "point", "intensity": 50.0}), [0.0, 1.0, 0.0], [0.0, -1.0, 0.0]);
+    gltf.camera([0.0, 2.0, 0.0], [0.0, -1.0, 0.0], 0.8);
+    gltf.to_json()
 }
 
 /// A Lambertian glTF material of linear colour `rgb` (no specular layer: `KHR_materials_specular`
