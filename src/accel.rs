@@ -108,7 +108,7 @@ pub struct RecordedRay {
 impl Accel {
     /// A BVH over `corners`, all fixed and all casting shadows.
     pub fn build(corners: &[[Vec3; 3]]) -> Self {
-        Accel::new(Arc::new(Bvh::build(corners, &vec![true; corners.len()])), Bvh::empty())
+        Accel::new(Arc::new(Bvh::build(corners, &vec![true; corners.len()], BuildFor::Range)), Bvh::empty())
     }
 
     /// The fixed part's BVH with the moving part's (numbered after the fixed triangles).
@@ -206,14 +206,27 @@ impl Accel {
     }
 }
 
+/// What a BVH is built for, which sets how much its build may cost.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum BuildFor {
+    /// The still part of a time range: built once, traced by every pass (obvhs' medium build).
+    Range,
+    /// The moving part at one time: built for every pose, which is every pass under motion blur
+    /// (obvhs' very fast build: on a skinned column of 125,000 triangles under motion blur, a
+    /// pass takes 17% less than with the medium build, and with one pose per frame tracing is
+    /// no slower, 1.12 s against 1.11 s for 32 passes).
+    Pose,
+}
+
 impl Bvh {
     /// A BVH over no triangles (the moving part of a still scene).
     pub fn empty() -> Self {
-        Bvh::build(&[], &[])
+        Bvh::build(&[], &[], BuildFor::Pose)
     }
 
-    /// Builds the BVH over `corners` (one entry per triangle), with whether each casts shadows.
-    pub fn build(corners: &[[Vec3; 3]], casts_shadow: &[bool]) -> Self {
+    /// Builds the BVH over `corners` (one entry per triangle), with whether each casts shadows,
+    /// for the use `built_for` says.
+    pub fn build(corners: &[[Vec3; 3]], casts_shadow: &[bool], built_for: BuildFor) -> Self {
         debug_assert_eq!(corners.len(), casts_shadow.len());
         let scale = working_scale(corners);
         // A triangle a transform has sent to infinity cannot be hit; it becomes a point (never hit)
@@ -227,7 +240,11 @@ impl Bvh {
         if triangles.is_empty() {
             return Bvh { bvh: None, triangles, scale, casts_shadow: Vec::new() };
         }
-        let bvh = build_cwbvh_from_tris(&triangles, BvhBuildParams::medium_build(), &mut Duration::default());
+        let params = match built_for {
+            BuildFor::Range => BvhBuildParams::medium_build(),
+            BuildFor::Pose => BvhBuildParams::very_fast_build(),
+        };
+        let bvh = build_cwbvh_from_tris(&triangles, params, &mut Duration::default());
         let in_slots = |i: &u32| *i as usize;
         Bvh {
             triangles: bvh.primitive_indices.iter().map(in_slots).map(|i| triangles[i]).collect(),

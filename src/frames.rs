@@ -10,7 +10,7 @@ use std::path::{Path, PathBuf};
 use std::sync::Arc;
 use std::time::Instant;
 
-use crate::accel::{Accel, Bvh};
+use crate::accel::{Accel, BuildFor, Bvh};
 use crate::error::{summarize, ErrorSummary, PixelError};
 use crate::film::{Film, FilmMode, GUIDE_SUMS};
 use crate::monitor::{ErrorSettings, Monitor, StopReason};
@@ -376,7 +376,8 @@ impl Shot {
     /// The scene and its BVHs at `time`.
     pub fn pose(&self, time: f32) -> (Scene, Accel) {
         let scene = self.prepared.pose(time);
-        let accel = Accel::new(Arc::clone(&self.fixed_bvh), scene.moving.bvh(&scene.materials));
+        let accel =
+            Accel::new(Arc::clone(&self.fixed_bvh), scene.moving.bvh(&scene.materials, BuildFor::Pose));
         (scene, accel)
     }
 

@@ -26,7 +26,7 @@ use std::sync::Arc;
 
 use glam::{Vec2, Vec3, Vec3A};
 
-use crate::accel::{Bvh, Hit};
+use crate::accel::{BuildFor, Bvh, Hit};
 use crate::camera::Camera;
 use crate::lights::{BoundingSphere, Light, LightTree, SphereLight};
 use crate::materials::{Material, ShadingFrame, SurfaceInputs};
@@ -78,12 +78,12 @@ pub struct Geometry {
 }
 
 impl Geometry {
-    /// The BVH over these triangles; those of materials light passes through unchanged (area
-    /// lights) cast no shadow.
-    pub fn bvh(&self, materials: &[Material]) -> Bvh {
+    /// The BVH over these triangles, for the use `built_for` says; those of materials light
+    /// passes through unchanged (area lights) cast no shadow.
+    pub fn bvh(&self, materials: &[Material], built_for: BuildFor) -> Bvh {
         let casts_shadow: Vec<bool> =
             self.triangles.iter().map(|t| !materials[t.material as usize].light_surface).collect();
-        Bvh::build(&self.corners(), &casts_shadow)
+        Bvh::build(&self.corners(), &casts_shadow, built_for)
     }
 
     /// The corners of every triangle, in order.

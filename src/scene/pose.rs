@@ -15,7 +15,7 @@ use super::description::{Description, Lens, LensSettings, MeshInstance, Punctual
 use super::{
     bounding_sphere, Geometry, OpenEdges, OpenSides, Scene, TriangleRef, DEFAULT_RADIUS_FRACTION, NOT_A_LIGHT,
 };
-use crate::accel::Bvh;
+use crate::accel::{BuildFor, Bvh};
 use crate::camera::Camera;
 use crate::lights::{
     Beam, BoundingSphere, CutEmission, Emission, EmittingTriangle, Light, LightTree, SphereLight,
@@ -260,7 +260,7 @@ impl Prepared {
 
     /// The fixed part's BVH (built once).
     pub fn fixed_bvh(&self) -> Bvh {
-        self.fixed.bvh(&self.description.materials)
+        self.fixed.bvh(&self.description.materials, BuildFor::Range)
     }
 
     /// The lens on the camera.
