@@ -90,6 +90,17 @@ fn a_moving_light_renders_each_frame_as_alone() {
     assert_reuse_renders_each_frame_alone(&scene, &[1, 12, 24], [48, 48]);
 }
 
+/// A skinned square whose morph target weight is animated, over a still lit floor: the square
+/// deforms and joins the moving part, the floor stays shared, and nothing else may change.
+#[test]
+fn a_deforming_mesh_renders_each_frame_as_alone() {
+    let dir = tempfile::tempdir().unwrap();
+    let scene = dir.path().join("deformed.gltf");
+    std::fs::write(&scene, deformed_square().to_string()).unwrap();
+    let block = assert_reuse_renders_each_frame_alone(&scene, &[1, 12, 24], [48, 48]);
+    assert!(block > 1, "the still floor is shared: frames render together");
+}
+
 /// A white floor lit by a point light of 4 pi W/sr 4 above the origin (floor radiance
 /// 16 / d^3 at distance d), with a glass ball (radius 0.5, centre 1 above the floor) that jumps
 /// from x = -1.2 in frame 1 to x = +1.2 in frame 2, seen from above at an angle.
