@@ -5,13 +5,11 @@
 //! ones). A deforming mesh is posed at each pass's time like a moving one, so it is
 //! motion-blurred as a moving mesh is; morph targets apply first, then the skin.
 
-use std::borrow::Cow;
 use std::sync::Arc;
 
 use glam::{Mat3, Mat4, Vec3, Vec4};
 
 use super::animation::Rig;
-use super::description::MeshInstance;
 
 /// A skin: its joints (nodes) and their inverse bind matrices.
 #[derive(Debug)]
@@ -114,46 +112,55 @@ fn picked_runs<T: Copy>(values: &[T], order: &[usize], k: usize) -> Vec<T> {
     order.iter().flat_map(|&v| values[v * k..(v + 1) * k].iter().copied()).collect()
 }
 
-/// `mesh` in its shape at `time`, and the matrix that takes it to world space (its node's; the
-/// identity for a skinned mesh, whose joints place it).
-pub fn posed<'a>(mesh: &'a MeshInstance, rig: &Rig, time: f32) -> (Cow<'a, MeshInstance>, Mat4) {
-    let world = rig.world(mesh.node, time);
-    let Some(deformation) = &mesh.deformation else {
-        return (Cow::Borrowed(mesh), world);
-    };
-    let mut shaped = mesh.clone();
-    if let Some(morph) = &deformation.morph {
-        let weights = rig.weights(mesh.node, time).unwrap_or_else(|| morph.weights.clone());
-        apply_morph(&mut shaped, morph, &weights);
-    }
-    match &deformation.skin {
-        Some(skinning) => {
-            apply_skin(&mut shaped, skinning, rig, time, world);
-            (Cow::Owned(shaped), Mat4::IDENTITY)
+/// A mesh's vertex attributes that a deformation moves (tangents may be empty).
+pub struct Vertices<'a> {
+    /// Positions.
+    pub positions: &'a mut [Vec3],
+    /// Normals.
+    pub normals: &'a mut [Vec3],
+    /// Tangents (xyz and handedness).
+    pub tangents: &'a mut [Vec4],
+}
+
+impl Deformation {
+    /// Moves the `vertices` of a mesh on `node` into their shape at `time`; gives the matrix
+    /// that then takes them to world space (the node's; the identity for a skinned mesh, whose
+    /// joints have placed it).
+    pub fn apply(&self, mut vertices: Vertices, rig: &Rig, node: usize, time: f32) -> Mat4 {
+        let world = rig.world(node, time);
+        if let Some(morph) = &self.morph {
+            let weights = rig.weights(node, time).unwrap_or_else(|| morph.weights.clone());
+            apply_morph(&mut vertices, morph, &weights);
         }
-        None => (Cow::Owned(shaped), world),
+        match &self.skin {
+            Some(skinning) => {
+                apply_skin(&mut vertices, skinning, rig, time, world);
+                Mat4::IDENTITY
+            }
+            None => world,
+        }
     }
 }
 
-/// Adds the targets' offsets, times `weights`, to `mesh`'s vertices.
-fn apply_morph(mesh: &mut MeshInstance, morph: &Morph, weights: &[f32]) {
+/// Adds the targets' offsets, times `weights`, to `vertices`.
+fn apply_morph(vertices: &mut Vertices, morph: &Morph, weights: &[f32]) {
     for (target, &w) in morph.targets.iter().zip(weights).filter(|(_, &w)| w != 0.0) {
         let add = |values: &mut [Vec3], offsets: &[Vec3]| {
             values.iter_mut().zip(offsets).for_each(|(v, &d)| *v += w * d);
         };
-        add(&mut mesh.positions, &target.positions);
-        add(&mut mesh.normals, &target.normals);
-        let tangents = &mut mesh.extras.tangents;
-        tangents.iter_mut().zip(&target.tangents).for_each(|(t, &d)| *t += (w * d).extend(0.0));
+        add(vertices.positions, &target.positions);
+        add(vertices.normals, &target.normals);
+        let tangents = vertices.tangents.iter_mut().zip(&target.tangents);
+        tangents.for_each(|(t, &d)| *t += (w * d).extend(0.0));
     }
     if morph.targets.iter().any(|t| !t.normals.is_empty()) {
-        mesh.normals.iter_mut().for_each(|n| *n = n.normalize_or_zero());
+        vertices.normals.iter_mut().for_each(|n| *n = n.normalize_or_zero());
     }
 }
 
-/// Moves `mesh`'s vertices to world space by their joints at `time` (vertices with no weight by
-/// the mesh node's matrix `node_world`); normals and tangents turn with them.
-fn apply_skin(mesh: &mut MeshInstance, skinning: &Skinning, rig: &Rig, time: f32, node_world: Mat4) {
+/// Moves `vertices` to world space by their joints at `time` (vertices with no weight by the
+/// mesh node's matrix `node_world`); normals and tangents turn with them.
+fn apply_skin(vertices: &mut Vertices, skinning: &Skinning, rig: &Rig, time: f32, node_world: Mat4) {
     let skin = &skinning.skin;
     let joint_matrices: Vec<Mat4> = skin
         .joints
@@ -162,7 +169,7 @@ fn apply_skin(mesh: &mut MeshInstance, skinning: &Skinning, rig: &Rig, time: f32
         .map(|(&j, &inverse)| rig.world(j, time) * inverse)
         .collect();
     let k = skinning.per_vertex;
-    for v in 0..mesh.positions.len() {
+    for v in 0..vertices.positions.len() {
         let influences =
             skinning.joints[v * k..(v + 1) * k].iter().zip(&skinning.weights[v * k..(v + 1) * k]);
         let blended = influences
@@ -170,12 +177,12 @@ fn apply_skin(mesh: &mut MeshInstance, skinning: &Skinning, rig: &Rig, time: f32
             .map(|(&j, &w)| joint_matrices[j as usize] * w)
             .reduce(|a, b| a + b)
             .unwrap_or(node_world);
-        mesh.positions[v] = blended.transform_point3(mesh.positions[v]);
+        vertices.positions[v] = blended.transform_point3(vertices.positions[v]);
         let linear = Mat3::from_mat4(blended);
-        if let Some(n) = mesh.normals.get_mut(v) {
+        if let Some(n) = vertices.normals.get_mut(v) {
             *n = (cofactor(linear) * *n).normalize_or_zero();
         }
-        if let Some(t) = mesh.extras.tangents.get_mut(v) {
+        if let Some(t) = vertices.tangents.get_mut(v) {
             *t = (linear * t.truncate()).normalize_or_zero().extend(t.w);
         }
     }

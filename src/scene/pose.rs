@@ -6,11 +6,13 @@
 //! vary: [`super::deform`]); everything else is flattened to world space once and shared (`Arc`)
 //! by every pose. A scene with nothing moving is posed once and never again.
 
+use std::borrow::Cow;
 use std::sync::Arc;
 
 use glam::{Mat3, Mat4, Vec3};
 
-use super::deform::{self, Deformation};
+use super::animation::Rig;
+use super::deform::{Deformation, Vertices};
 use super::description::{Description, Lens, LensSettings, MeshInstance, PunctualKind, PunctualLight};
 use super::{
     bounding_sphere, Geometry, OpenEdges, OpenSides, Scene, TriangleRef, DEFAULT_RADIUS_FRACTION, NOT_A_LIGHT,
@@ -76,11 +78,26 @@ fn flatten(mesh: &MeshInstance, world: Mat4, out: &mut Geometry) {
     }));
 }
 
+/// `mesh` in its shape at `time`, and the matrix that takes it to world space.
+fn posed<'a>(mesh: &'a MeshInstance, rig: &Rig, time: f32) -> (Cow<'a, MeshInstance>, Mat4) {
+    let Some(deformation) = &mesh.deformation else {
+        return (Cow::Borrowed(mesh), rig.world(mesh.node, time));
+    };
+    let mut shaped = mesh.clone();
+    let vertices = Vertices {
+        positions: &mut shaped.positions,
+        normals: &mut shaped.normals,
+        tangents: &mut shaped.extras.tangents,
+    };
+    let world = deformation.apply(vertices, rig, mesh.node, time);
+    (Cow::Owned(shaped), world)
+}
+
 /// `meshes` of `description` flattened in their pose (and shape) at `time`.
 fn flatten_at(description: &Description, meshes: &[usize], time: f32) -> Geometry {
     let mut out = Geometry::default();
     for &m in meshes {
-        let (mesh, world) = deform::posed(&description.meshes[m], &description.rig, time);
+        let (mesh, world) = posed(&description.meshes[m], &description.rig, time);
         flatten(&mesh, world, &mut out);
     }
     out
@@ -161,7 +178,7 @@ fn swept_bounds(description: &Description, mesh: &MeshInstance, range: TimeRange
     let samples = if mesh.deformation.is_some() { DEFORMED_SWEEP_SAMPLES } else { SWEEP_SAMPLES };
     let times = (0..=samples).map(|i| range.start + (range.end - range.start) * i as f32 / samples as f32);
     let posed = times.flat_map(|t| -> Vec<Vec3> {
-        let (shaped, world) = deform::posed(mesh, &description.rig, t);
+        let (shaped, world) = posed(mesh, &description.rig, t);
         let points = if mesh.deformation.is_some() { &shaped.positions } else { &corners };
         points.iter().map(|&c| world.transform_point3(c)).collect()
     });
