@@ -74,10 +74,9 @@ impl Deformation {
 
     /// The deformation of a mesh whose vertex `i` is vertex `order[i]` of this one's.
     pub fn picked(&self, order: &[usize]) -> Deformation {
-        let pick = |values: &[Vec3]| match values.is_empty() {
-            true => Vec::new(),
-            false => order.iter().map(|&v| values[v]).collect(),
-        };
+        // Offsets a target does not have stay absent.
+        let pick =
+            |values: &[Vec3]| if values.is_empty() { Vec::new() } else { picked_runs(values, order, 1) };
         let skin = self.skin.as_ref().map(|s| {
             let k = s.per_vertex;
             Skinning {
