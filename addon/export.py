@@ -10,6 +10,7 @@ complete two values of the layers the exporter leaves out (`complete_layers`). L
 temperature have it switched off while the exporter runs (it raises on them) and back on after.
 """
 
+import json
 import math
 import os
 import pathlib
@@ -18,6 +19,8 @@ import time
 
 import bpy
 from bpy.props import StringProperty
+
+from . import animated
 
 # True only while Caustic exports: the hooks stay out of the user's own glTF exports.
 _exporting = False
@@ -610,6 +613,7 @@ def scene_warnings(depsgraph):
                  for slot in obj.material_slots if slot.material is not None}
     warnings = [w for m in sorted(materials, key=lambda m: m.name) for w in material_warnings(m)]
     warnings += camera_warnings(depsgraph.scene)
+    warnings += animated.unrendered_warnings(depsgraph.scene)
     for light in {obj.data for obj in depsgraph.scene.objects if obj.type == 'LIGHT'}:
         if light.type == 'AREA' and light.spread < NARROWEST_SPREAD:
             warnings.append(f"light '{light.name}': a Spread under 1 degree is rendered as 1 degree")
@@ -623,8 +627,8 @@ def export(scene, path):
     start = time.perf_counter()
     _world = world_extras(scene.world, pathlib.Path(path).parent)
     _holdouts = holdout_objects(bpy.context.view_layer)
-    # One timeline sampled once a frame (LINEAR keys); no KHR_animation_pointer (the renderer
-    # cannot read it).
+    # One timeline sampled once a frame (LINEAR keys); animated values are sampled by
+    # `add_tracks`, not by the exporter's pointer animation (which raises on rigged scenes).
     options = dict(filepath=str(path), export_format='GLTF_SEPARATE', export_cameras=True, export_lights=True,
                    export_extras=True, export_apply=True, export_yup=True, use_renderable=True,
                    use_active_scene=True, export_animations=True, export_animation_mode='SCENE',
@@ -644,7 +648,22 @@ def export(scene, path):
         _exporting, _world, _holdouts = False, None, set()
     if result != {'FINISHED'}:
         raise RuntimeError(f"Blender's glTF exporter did not finish ({result})")
+    add_tracks(scene, pathlib.Path(path))
     return time.perf_counter() - start
+
+
+def add_tracks(scene, path):
+    """Adds the scene's animated values (`animated.tracks`) to the exported file's scene extras."""
+    gltf = json.loads(path.read_text())
+    found = animated.tracks(scene, gltf)
+    if not found:
+        return
+    scene_index = gltf.get("scene", 0)
+    extras = gltf["scenes"][scene_index].setdefault("extras", {})
+    extras.setdefault("caustic", {})["tracks"] = found
+    partial = path.with_suffix(".gltf.partial")
+    partial.write_text(json.dumps(gltf))
+    os.replace(partial, path)
 
 
 class CAUSTIC_OT_export_scene(bpy.types.Operator):

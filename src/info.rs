@@ -5,6 +5,25 @@ use serde_json::{json, Value};
 
 use crate::frames::{load_description, RenderSettings, Shot};
 use crate::materials::Material;
+use crate::scene::description::Description;
+
+/// The lights (by node), materials and camera whose values are animated, with what is animated.
+fn animated_values(description: &Description) -> Value {
+    let lights = description.lights.iter().filter_map(|light| {
+        let values = light.animation.as_ref()?.tracks.properties();
+        Some(json!({"node": light.node, "values": values}))
+    });
+    let mut materials: Vec<Value> = Vec::new();
+    for (m, animation) in &description.material_animations {
+        let entry =
+            json!({"material": description.materials[*m].name, "values": animation.tracks.properties()});
+        if !materials.contains(&entry) {
+            materials.push(entry);
+        }
+    }
+    let camera = description.camera.animation.as_ref().map(|a| a.tracks.properties()).unwrap_or_default();
+    json!({"lights": lights.collect::<Vec<_>>(), "materials": materials, "camera": camera})
+}
 
 /// The JSON report for `settings.scene` over `settings.frames`.
 pub fn report(settings: &RenderSettings) -> Result<Value, String> {
@@ -25,6 +44,7 @@ pub fn report(settings: &RenderSettings) -> Result<Value, String> {
             deforming.push(entry);
         }
     }
+    let animated = animated_values(&description);
     let shot = Shot::new(settings, description)?;
     let prepared = shot.prepared();
     let (fixed, moving) = prepared.triangle_counts();
@@ -78,6 +98,7 @@ pub fn report(settings: &RenderSettings) -> Result<Value, String> {
         "reuse_shares": reuse_shares,
         "triangles": {"static": fixed, "moving": moving},
         "deforming": deforming,
+        "animated": animated,
         "skipped": skipped,
     }))
 }

@@ -263,12 +263,13 @@ proptest! {
     fn real_json_with_hostile_values_never_panics(seed in any::<u64>()) {
         let mut rng = rand_pcg::Pcg64::seed_from_u64(seed);
         let name = ["furnace.gltf", "cornell_animated.gltf", "prism.gltf", "spot_glass.gltf", "textured", "volumes",
-            "cameras", "deformed"][rng.random_range(0..8)];
+            "cameras", "deformed", "animated"][rng.random_range(0..9)];
         let mut doc: Value = match name {
             "textured" => textured_seed(),
             "volumes" => volume_seed(),
             "cameras" => camera_seed(),
             "deformed" => common::deformed_square(),
+            "animated" => common::animated_values(),
             _ => serde_json::from_slice(&std::fs::read(scenes().join(name)).unwrap()).unwrap(),
         };
         for _ in 0..rng.random_range(1..4) {
@@ -278,7 +279,7 @@ proptest! {
     }
 }
 
-/// The textured, volume, camera and deformation seeds themselves load and render (so their mutations explore
+/// The textured, volume, camera, deformation and animated-value seeds themselves load and render (so their mutations explore
 /// past the loader), with no warning but the pane's (glass on an open mesh) and the cameras not
 /// chosen.
 #[test]
@@ -289,6 +290,7 @@ fn the_built_seeds_render() {
         ("volumes", volume_seed(), 1, "'Pane'"),
         ("cameras", camera_seed(), 0, ""),
         ("deformed", common::deformed_square(), 0, ""),
+        ("animated", common::animated_values(), 0, ""),
     ];
     for (name, seed, expected, named) in seeds {
         let path = dir.path().join(format!("{name}.gltf"));

@@ -419,6 +419,83 @@ fn hostile_texture_references_are_named() {
     }
 }
 
+/// Each broken animated value (`KHR_animation_pointer` or the `caustic.tracks` extras) is refused
+/// with a message naming its pointer.
+#[test]
+fn hostile_animated_values_are_refused() {
+    let dir = tempfile::tempdir().unwrap();
+    let base = animated_values();
+    let write = |name: &str, edit: &dyn Fn(&mut Value)| {
+        let mut doc = base.clone();
+        edit(&mut doc);
+        let path = dir.path().join(name);
+        std::fs::write(&path, doc.to_string()).unwrap();
+        path
+    };
+    let out = tempfile::tempdir().unwrap();
+    let output = run_within_a_minute(render_command(&write("whole.gltf", &|_| {}), out.path()));
+    assert!(output.status.success(), "{}", String::from_utf8_lossy(&output.stderr));
+    let pointer = |d: &mut Value, p: &str| {
+        d["animations"][0]["channels"][0]["target"]["extensions"]["KHR_animation_pointer"]["pointer"] =
+            json!(p)
+    };
+    let cases: [(&str, &dyn Fn(&mut Value), &[&str]); 8] = [
+        (
+            "no_such_light.gltf",
+            &|d| pointer(d, "/extensions/KHR_lights_punctual/lights/3/intensity"),
+            &["lights/3/intensity", "names light 3, but the file has 1"],
+        ),
+        (
+            "no_such_material.gltf",
+            &|d| pointer(d, "/materials/9/emissiveFactor"),
+            &["'/materials/9/emissiveFactor'", "names materials 9, but the file has 2"],
+        ),
+        (
+            "no_pointer.gltf",
+            &|d| {
+                d["animations"][0]["channels"][0]["target"]
+                    .as_object_mut()
+                    .unwrap()
+                    .remove("extensions")
+                    .map(drop)
+                    .unwrap()
+            },
+            &["animation 0 channel 0", "no KHR_animation_pointer pointer"],
+        ),
+        (
+            "colour_of_one_float.gltf",
+            &|d| pointer(d, "/extensions/KHR_lights_punctual/lights/0/color"),
+            &["lights/0/color", "2 key times need 6 values, found 2"],
+        ),
+        (
+            "integer_keys.gltf",
+            &|d| {
+                let output = d["animations"][0]["samplers"][0]["output"].as_u64().unwrap() as usize;
+                d["accessors"][output]["componentType"] = json!(5123);
+            },
+            &["lights/0/intensity", "must hold float scalars or vectors"],
+        ),
+        (
+            "missing_sampler.gltf",
+            &|d| d["animations"][0]["channels"][0]["sampler"] = json!(5),
+            &["lights/0/intensity", "names sampler 5, but the animation has 1"],
+        ),
+        (
+            "tracks_backwards.gltf",
+            &|d| d["scenes"][0]["extras"]["caustic"]["tracks"][0]["times"] = json!([1.0, 0.0]),
+            &["`caustic.tracks`", "area_light/power", "key times must increase"],
+        ),
+        (
+            "tracks_cubic.gltf",
+            &|d| d["scenes"][0]["extras"]["caustic"]["tracks"][0]["interpolation"] = json!("CUBICSPLINE"),
+            &["`caustic.tracks`", "LINEAR or STEP, got CUBICSPLINE"],
+        ),
+    ];
+    for (name, edit, expected) in cases {
+        assert_refused(&write(name, edit), expected);
+    }
+}
+
 /// Each broken piece of a skin or of morph targets is refused with a message naming it.
 #[test]
 fn hostile_skins_and_morph_targets_are_refused() {

@@ -90,6 +90,51 @@ fn a_moving_light_renders_each_frame_as_alone() {
     assert_reuse_renders_each_frame_alone(&scene, &[1, 12, 24], [48, 48]);
 }
 
+/// A point light whose intensity and colour change, a glowing square whose emission changes and
+/// a ball whose base colour and roughness change (`KHR_animation_pointer`), over a still floor:
+/// what they light is traced per frame, the floor stays shared, and nothing else may change.
+#[test]
+fn animated_values_render_each_frame_as_alone() {
+    let dir = tempfile::tempdir().unwrap();
+    let mut gltf = GltfBuilder::default();
+    let white = gltf.material(diffuse([0.8, 0.8, 0.8]));
+    gltf.quad_y("Floor", 0.0, 3.0, true, white);
+    let ball = gltf.material(diffuse([0.2, 0.8, 0.2]));
+    gltf.sphere("Ball", [0.0, 0.5, 0.0], 0.5, 8, ball);
+    let glow = gltf.material(json!({"emissiveFactor": [1.0, 0.5, 0.2]}));
+    gltf.quad_y("Glow", 0.01, 0.3, true, glow);
+    gltf.light(json!({"type": "point", "intensity": 4000.0}), [-1.0, 2.0, 0.0], [0.0, -1.0, 0.0]);
+    gltf.camera([0.0, 3.0, 4.0], [0.0, -3.0, -4.0], 0.9);
+    gltf.scene_extras(json!({"fps": 24.0}));
+    let times = [0.0, 1.0];
+    let keys = |a: &[f32], b: &[f32]| [a.to_vec(), b.to_vec()];
+    gltf.animate_pointer(
+        "/extensions/KHR_lights_punctual/lights/0/intensity",
+        &times,
+        &keys(&[1000.0], &[6000.0]),
+        "LINEAR",
+    );
+    gltf.animate_pointer(
+        "/extensions/KHR_lights_punctual/lights/0/color",
+        &times,
+        &keys(&[1.0, 1.0, 1.0], &[1.0, 0.3, 0.1]),
+        "LINEAR",
+    );
+    gltf.animate_pointer(
+        &format!("/materials/{glow}/emissiveFactor"),
+        &times,
+        &keys(&[1.0, 0.5, 0.2], &[0.1, 0.2, 1.0]),
+        "STEP",
+    );
+    let factor = format!("/materials/{ball}/pbrMetallicRoughness/baseColorFactor");
+    gltf.animate_pointer(&factor, &times, &keys(&[0.2, 0.8, 0.2, 1.0], &[0.8, 0.2, 0.2, 1.0]), "LINEAR");
+    let roughness = format!("/materials/{ball}/pbrMetallicRoughness/roughnessFactor");
+    gltf.animate_pointer(&roughness, &times, &keys(&[1.0], &[0.2]), "LINEAR");
+    let scene = gltf.write(dir.path(), "animated_values");
+    let block = assert_reuse_renders_each_frame_alone(&scene, &[1, 12, 24], [48, 48]);
+    assert!(block > 1, "the still floor is shared: frames render together");
+}
+
 /// A skinned square whose morph target weight is animated, over a still lit floor: the square
 /// deforms and joins the moving part, the floor stays shared, and nothing else may change.
 #[test]

@@ -77,6 +77,11 @@ impl Track {
         }
     }
 
+    /// The largest key value, component by component.
+    pub fn peak(&self) -> Vec4 {
+        (0..self.times.len()).map(|k| self.key(k)).fold(Vec4::splat(f32::NEG_INFINITY), Vec4::max)
+    }
+
     /// Whether the value changes anywhere in [t0, t1].
     pub fn varies_within(&self, t0: f32, t1: f32) -> bool {
         let first = self.sample(t0);

@@ -49,8 +49,10 @@ pub enum PunctualKind {
 pub struct PunctualLight {
     /// The glTF node.
     pub node: usize,
-    /// What it emits.
+    /// What it emits (at rest).
     pub kind: PunctualKind,
+    /// Its animated colour, intensity and cone, if any.
+    pub animation: Option<Box<super::values::LightAnimation>>,
 }
 
 /// The camera on its node.
@@ -69,6 +71,8 @@ pub struct CameraInstance {
     pub focal_length_mm: f32,
     /// The lens from the extras (`None`: a pinhole unless flags give an f-stop).
     pub lens: Option<LensSettings>,
+    /// Its animated field of view, if any.
+    pub animation: Option<Box<super::values::CameraAnimation>>,
 }
 
 /// Depth-of-field settings as the user gives them.
@@ -109,8 +113,10 @@ pub struct Description {
     pub lights: Vec<PunctualLight>,
     /// The camera.
     pub camera: CameraInstance,
-    /// Materials.
+    /// Materials (at rest).
     pub materials: Vec<Material>,
+    /// The animated materials (by index) and their animations.
+    pub material_animations: Vec<(usize, super::values::MaterialAnimation)>,
     /// The world, if any.
     pub world: Option<World>,
     /// Resolution from the extras.

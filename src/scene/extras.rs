@@ -4,7 +4,8 @@
 //! inside it are errors (a typo must not be silently ignored). The schema is documented for users
 //! in `docs/extras.md`; keep the two in step.
 //!
-//! - scene: `{"caustic": {"resolution": [w, h], "world": World, "fps": 24, "shutter": Shutter}}`
+//! - scene: `{"caustic": {"resolution": [w, h], "world": World, "fps": 24, "shutter": Shutter,
+//!   "tracks": [Track]}}`
 //! - node: `{"caustic": {"area_light": AreaLight}}` on an area light's (empty) node, and
 //!   `{"caustic": {"sun_angle_deg": a}}` on a sun's node, `{"caustic": {"lens": Lens}}` on the
 //!   camera's node;
@@ -32,6 +33,10 @@ pub struct SceneExtras {
     pub transparent_film: bool,
     /// The name of the camera's node to render through (absent: the first camera).
     pub camera: Option<String>,
+    /// Animated values as keys on `KHR_animation_pointer` pointers, including pointers into
+    /// these extras for what glTF cannot animate (an area light's power).
+    #[serde(default)]
+    pub tracks: Vec<super::pointers::TrackExtras>,
 }
 
 /// Blender's motion-blur shutter.

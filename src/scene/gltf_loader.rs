@@ -1,7 +1,8 @@
 //! glTF 2.0 as Blender 5.0's exporter writes it, plus the `caustic` extras, into a
 //! [`Description`]: meshes in their nodes' local space with their skins and morph targets, and
-//! the node rig with its animation (translation, rotation, scale and morph target weights;
-//! `KHR_animation_pointer` cannot be read by the gltf crate).
+//! the node rig with its animation (translation, rotation, scale and morph target weights), and
+//! the animated values of lights, materials and the camera (`KHR_animation_pointer`, which the
+//! gltf crate cannot read, is taken out of the JSON first: [`super::pointers`]).
 //!
 //! Reads the default scene's node tree (nested transforms), triangle meshes with normals,
 //! texture coordinates (sets 0 and 1), vertex colours and tangents (generated where a normal map
@@ -15,11 +16,12 @@ use std::path::Path;
 use std::sync::Arc;
 
 use super::deform::{self, Deformation, Morph, MorphTarget, Skin, Skinning};
+use super::pointers::{self, Animations, Keys, NodeProperty};
+use super::values::{CameraAnimation, LightAnimation, MaterialAnimation};
 use super::{gltf_checks, gltf_unrendered};
 
 use glam::{Mat4, Quat, Vec2, Vec3, Vec4};
 use gltf::animation::util::ReadOutputs;
-use gltf::animation::Property;
 use gltf::khr_lights_punctual::Kind;
 
 use super::animation::{Interpolation, NodeMotion, Rig, Track};
@@ -55,6 +57,10 @@ struct Builder<'a> {
     holdout_materials: std::collections::HashMap<u32, u32>,
     /// The skins read so far, by index.
     skins: std::collections::HashMap<usize, Arc<Skin>>,
+    /// Animated values, by what they animate.
+    animations: &'a Animations,
+    /// The animated materials so far, by index.
+    material_animations: Vec<(usize, MaterialAnimation)>,
 }
 
 /// Loads `path` into a [`Description`].
@@ -66,13 +72,18 @@ pub fn load(path: &Path) -> Result<Description, SceneError> {
     // The references are checked before anything they name is read, and the mesh accessor
     // indices before the gltf crate validates the file (its validation indexes them unchecked).
     let bytes = std::fs::read(path).map_err(|e| fail(format!("cannot read the file: {e}")))?;
+    // The pointer channels go before the gltf crate reads the file (it cannot parse them).
+    let (bytes, pointer_channels) = pointers::strip(&bytes).map_err(fail)?;
     let unchecked = gltf::Gltf::from_slice_without_validation(&bytes)
         .map_err(|e| fail(gltf_checks::describe_import_error(e)))?;
     gltf_checks::check_indices(unchecked.document.as_json()).map_err(fail)?;
-    let parsed = gltf::Gltf::from_slice(&bytes).map_err(|e| fail(gltf_checks::describe_import_error(e)))?;
-    gltf_checks::check_references(&parsed.document).map_err(fail)?;
-    let (document, buffers, images) =
-        gltf::import(path).map_err(|e| fail(gltf_checks::describe_import_error(e)))?;
+    let gltf::Gltf { document, blob } =
+        gltf::Gltf::from_slice(&bytes).map_err(|e| fail(gltf_checks::describe_import_error(e)))?;
+    gltf_checks::check_references(&document).map_err(fail)?;
+    let base = path.parent().unwrap_or(Path::new("."));
+    let imported = gltf::import_buffers(&document, Some(base), blob)
+        .and_then(|buffers| Ok((gltf::import_images(&document, Some(base), &buffers)?, buffers)));
+    let (images, buffers) = imported.map_err(|e| fail(gltf_checks::describe_import_error(e)))?;
     gltf_checks::check_accessors(&document, &buffers).map_err(fail)?;
     let gltf_scene = document
         .default_scene()
@@ -87,8 +98,12 @@ pub fn load(path: &Path) -> Result<Description, SceneError> {
         .map_err(fail)?;
     let material_offset = materials.len() as u32;
     materials.push(Material::default_grey());
-    let rig = rig(&document, &buffers).map_err(fail)?;
-    let unrendered = document.materials().flat_map(|m| gltf_unrendered::material_warnings(&m)).collect();
+    let animations =
+        pointers::read(&document, &buffers, &pointer_channels, &scene_extras.tracks).map_err(fail)?;
+    let rig = rig(&document, &buffers, &animations.nodes).map_err(fail)?;
+    let mut unrendered: Vec<String> =
+        document.materials().flat_map(|m| gltf_unrendered::material_warnings(&m)).collect();
+    unrendered.extend(animations.warnings.iter().cloned());
     let mut builder = Builder {
         buffers: &buffers,
         materials,
@@ -101,11 +116,14 @@ pub fn load(path: &Path) -> Result<Description, SceneError> {
         thin_materials: Default::default(),
         holdout_materials: Default::default(),
         skins: Default::default(),
+        animations: &animations,
+        material_animations: gltf_material_animations(&document, &animations),
     };
     for node in gltf_scene.nodes() {
         builder.visit(&node, &rig).map_err(fail)?;
     }
     let world = scene_extras.world.as_ref().map(|w| world(w, path)).transpose().map_err(fail)?;
+    let material_animations = builder.material_animations_with_copies();
     let camera = builder.camera.ok_or_else(|| {
         fail(match &scene_extras.camera {
             Some(name) => format!("scene extras `caustic.camera` names node '{name}', which is not a camera"),
@@ -122,6 +140,7 @@ pub fn load(path: &Path) -> Result<Description, SceneError> {
         meshes: builder.meshes,
         lights: builder.lights,
         camera,
+        material_animations,
         materials: builder.materials,
         world,
         resolution: scene_extras.resolution,
@@ -142,6 +161,25 @@ pub fn load(path: &Path) -> Result<Description, SceneError> {
     Ok(description)
 }
 
+/// The animations of the file's materials, each with its emission at rest.
+fn gltf_material_animations(
+    document: &gltf::Document,
+    animations: &Animations,
+) -> Vec<(usize, MaterialAnimation)> {
+    let mut list: Vec<(usize, MaterialAnimation)> = animations
+        .materials
+        .iter()
+        .filter_map(|(&index, tracks)| {
+            let m = document.materials().nth(index)?;
+            let emissive = Vec3::from(m.emissive_factor());
+            let animation = MaterialAnimation::gltf(emissive, m.emissive_strength().unwrap_or(1.0));
+            Some((index, MaterialAnimation { tracks: tracks.clone(), ..animation }))
+        })
+        .collect();
+    list.sort_by_key(|(index, _)| *index);
+    list
+}
+
 /// `lines` without repeats (a mesh drawn by several nodes warns once), in their first order.
 fn unique(lines: Vec<String>) -> Vec<String> {
     let mut seen = std::collections::HashSet::new();
@@ -149,7 +187,11 @@ fn unique(lines: Vec<String>) -> Vec<String> {
 }
 
 /// Every node's parent, rest transform and animation tracks.
-fn rig(document: &gltf::Document, buffers: &[gltf::buffer::Data]) -> Result<Rig, String> {
+fn rig(
+    document: &gltf::Document,
+    buffers: &[gltf::buffer::Data],
+    pointed: &[(usize, NodeProperty, Keys)],
+) -> Result<Rig, String> {
     let mut nodes: Vec<NodeMotion> = document
         .nodes()
         .map(|n| {
@@ -173,31 +215,53 @@ fn rig(document: &gltf::Document, buffers: &[gltf::buffer::Data]) -> Result<Rig,
             nodes[child.index()].parent = Some(node.index());
         }
     }
-    for animation in document.animations() {
-        for channel in animation.channels() {
-            let target = channel.target();
-            let (mut tracks, weight_count) = channel_tracks(&channel, buffers)?;
-            let motion = &mut nodes[target.node().index()];
-            match target.property() {
-                Property::Translation => motion.translation = tracks.pop(),
-                Property::Rotation => motion.rotation = tracks.pop(),
-                Property::Scale => motion.scale = tracks.pop(),
-                Property::MorphTargetWeights => {
-                    motion.weights = tracks;
-                    motion.weight_count = weight_count;
+    let channels: Vec<_> = document.animations().flat_map(|a| a.channels().collect::<Vec<_>>()).collect();
+    let mut keyed = Vec::new();
+    for channel in &channels {
+        let (property, keys) = channel_keys(channel, buffers)?;
+        keyed.push((channel.target().node().index(), property, keys));
+    }
+    for (index, property, keys) in keyed.into_iter().chain(pointed.iter().cloned()) {
+        let node = document.nodes().nth(index).expect("checked node index");
+        let in_node = |e: String| format!("animation of node '{}': {e}", node.name().unwrap_or("unnamed"));
+        let motion = &mut nodes[index];
+        match property {
+            NodeProperty::Translation => {
+                motion.translation = Some(pointers::track(keys, 3).map_err(in_node)?)
+            }
+            NodeProperty::Scale => motion.scale = Some(pointers::track(keys, 3).map_err(in_node)?),
+            NodeProperty::Rotation => {
+                let track = pointers::track(keys, 4).map_err(in_node)?;
+                motion.rotation = Some(Track { is_rotation: true, ..track });
+            }
+            NodeProperty::Weights => {
+                let count = morph_target_count(&node);
+                if count == 0 {
+                    return Err(in_node(
+                        "it animates morph target weights, but the node's mesh has no morph targets".into(),
+                    ));
                 }
+                pointers::check(&keys, count).map_err(in_node)?;
+                let groups = deform::weight_groups(&keys.values, count);
+                let track = |values| Track {
+                    times: keys.times.clone(),
+                    values,
+                    interpolation: keys.interpolation,
+                    is_rotation: false,
+                };
+                motion.weights = groups.into_iter().map(track).collect();
+                motion.weight_count = count;
             }
         }
     }
     Ok(Rig { nodes })
 }
 
-/// The tracks an animation channel sets: one for a translation, rotation or scale; one per four
-/// targets for morph target weights, with the number of targets.
-fn channel_tracks(
+/// What an animation channel sets and its keys, as floats.
+fn channel_keys(
     channel: &gltf::animation::Channel,
     buffers: &[gltf::buffer::Data],
-) -> Result<(Vec<Track>, usize), String> {
+) -> Result<(NodeProperty, Keys), String> {
     let target = channel.target();
     let name = target.node().name().unwrap_or("unnamed").to_string();
     let reader = channel.reader(|b| buffers.get(b.index()).map(|d| &d.0[..]));
@@ -208,45 +272,14 @@ fn channel_tracks(
         gltf::animation::Interpolation::Linear => Interpolation::Linear,
         gltf::animation::Interpolation::CubicSpline => Interpolation::CubicSpline,
     };
-    let per_key = if interpolation == Interpolation::CubicSpline { 3 } else { 1 };
-    let sorted = times.windows(2).all(|w| w[0] < w[1]);
-    let entries = per_key * times.len();
-    let count_error = |found: usize, each: usize| {
-        format!(
-            "animation of node '{name}': {} key times (increasing) need {} values, found {found}",
-            times.len(),
-            entries * each
-        )
-    };
-    let (values, is_rotation, weight_count): (Vec<Vec<Vec4>>, bool, usize) = match reader.read_outputs() {
-        Some(ReadOutputs::Translations(v)) | Some(ReadOutputs::Scales(v)) => {
-            (vec![v.map(|v| Vec3::from(v).extend(0.0)).collect()], false, 0)
-        }
-        Some(ReadOutputs::Rotations(r)) => (vec![r.into_f32().map(Vec4::from).collect()], true, 0),
-        Some(ReadOutputs::MorphTargetWeights(w)) => {
-            let flat: Vec<f32> = w.into_f32().collect();
-            let count = morph_target_count(&target.node());
-            if count == 0 {
-                return Err(format!(
-                    "animation of node '{name}': it animates morph target weights, but the node's mesh has no morph targets"
-                ));
-            }
-            if flat.len() != entries * count {
-                return Err(count_error(flat.len(), count));
-            }
-            (deform::weight_groups(&flat, count), false, count)
-        }
+    let (property, values): (NodeProperty, Vec<f32>) = match reader.read_outputs() {
+        Some(ReadOutputs::Translations(v)) => (NodeProperty::Translation, v.flatten().collect()),
+        Some(ReadOutputs::Scales(v)) => (NodeProperty::Scale, v.flatten().collect()),
+        Some(ReadOutputs::Rotations(r)) => (NodeProperty::Rotation, r.into_f32().flatten().collect()),
+        Some(ReadOutputs::MorphTargetWeights(w)) => (NodeProperty::Weights, w.into_f32().collect()),
         None => return Err(format!("animation of node '{name}': no key values")),
     };
-    if !times.iter().all(|t| t.is_finite()) || !values.iter().flatten().all(|v| v.is_finite()) {
-        return Err(format!("animation of node '{name}': key times or values are not finite numbers"));
-    }
-    if times.is_empty() || values.iter().any(|v| v.len() != entries) || !sorted {
-        return Err(count_error(values.first().map_or(0, Vec::len), 1));
-    }
-    let tracks =
-        values.into_iter().map(|values| Track { times: times.clone(), values, interpolation, is_rotation });
-    Ok((tracks.collect(), weight_count))
+    Ok((property, Keys { times, values, interpolation }))
 }
 
 /// How many morph targets the mesh on `node` has (glTF asks every primitive for the same number).
@@ -445,7 +478,15 @@ impl Builder<'_> {
             _ => 1.0,
         };
         let focal_length_mm = lens.and_then(|l| l.focal_length_mm).unwrap_or(18.0 / tan_half_wide);
+        let tracks = camera.and_then(|c| self.animations.cameras.get(&c.index()));
+        let animation = tracks.map(|tracks| Box::new(CameraAnimation { tracks: tracks.clone() }));
+        if animation.is_some() && !matches!(projection, Projection::Perspective { .. }) {
+            self.warnings.push(format!(
+                "camera node '{name}': its animated field of view is rendered for perspective cameras only"
+            ));
+        }
         self.camera = Some(CameraInstance {
+            animation,
             node,
             projection,
             shift,
@@ -492,7 +533,16 @@ impl Builder<'_> {
             }
             Kind::Directional => PunctualKind::Sun(spectrum, sun_disc(extras)),
         };
-        self.lights.push(PunctualLight { node, kind });
+        let animation = self.animations.lights.get(&light.index()).map(|tracks| {
+            Box::new(LightAnimation {
+                colour: Vec3::from(light.color()),
+                intensity: light.intensity(),
+                per_unit: 1.0 / LUMENS_PER_WATT,
+                kelvin,
+                tracks: tracks.clone(),
+            })
+        });
+        self.lights.push(PunctualLight { node, kind, animation });
     }
 
     /// An area light becomes one-sided emitting triangles with radiance P / (pi A), A its area
@@ -518,7 +568,18 @@ impl Builder<'_> {
         }
         let local = shapes::area_light_triangles(area);
         let area_m2 = world_area(&local, rig, node);
-        let colour = Vec3::from(area.color) * area.power / (std::f32::consts::PI * area_m2);
+        let per_unit = 1.0 / (std::f32::consts::PI * area_m2);
+        let colour = Vec3::from(area.color) * area.power * per_unit;
+        if let Some(tracks) = self.animations.area_lights.get(&node) {
+            let animation = MaterialAnimation {
+                emissive: Vec3::from(area.color),
+                strength: area.power,
+                per_unit,
+                kelvin: light_temperature(extras, name)?,
+                tracks: tracks.clone(),
+            };
+            self.material_animations.push((self.materials.len(), animation));
+        }
         let material = Material {
             name: format!("area light '{name}'"),
             base_colour: BaseColour::Constant(RgbSpectrum::constant(0.0)),
@@ -531,6 +592,16 @@ impl Builder<'_> {
         };
         self.add_light_mesh(node, material, &local);
         Ok(())
+    }
+
+    /// The material animations, each also on the thin-wall copy of its material (a holdout
+    /// copy stays black).
+    fn material_animations_with_copies(&self) -> Vec<(usize, MaterialAnimation)> {
+        let thin = |m: usize| self.thin_materials.get(&(m as u32)).map(|&c| c as usize);
+        let all = self.material_animations.iter().flat_map(|(m, animation)| {
+            std::iter::once(*m).chain(thin(*m)).map(move |c| (c, animation.clone()))
+        });
+        all.collect()
     }
 
     /// The triangles `local` on `node` emitting from their front faces with `material`.

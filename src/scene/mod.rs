@@ -17,9 +17,11 @@ mod gltf_loader;
 mod gltf_materials;
 mod gltf_textures;
 mod gltf_unrendered;
+pub mod pointers;
 pub mod pose;
 mod shapes;
 mod tangents;
+pub mod values;
 
 use std::path::{Path, PathBuf};
 use std::sync::Arc;

@@ -51,6 +51,11 @@ pub struct Prepared {
     pub range: TimeRange,
     fixed: Arc<Geometry>,
     fixed_lights: Vec<Light>,
+    /// The powers by which photons choose the fixed lights: an animated light's at its peak, so
+    /// that the choice is the same whatever range a render covers (reuse across frames).
+    fixed_choice_powers: Vec<f64>,
+    /// The materials emitting at their peaks, where any emission is animated.
+    peak_materials: Option<Vec<Material>>,
     fixed_triangle_lights: Arc<Vec<u32>>,
     open_edges: Arc<OpenEdges>,
     /// The moving triangles' open sides, found in their pose at the range's start.
@@ -59,7 +64,10 @@ pub struct Prepared {
     moving_lights: Vec<usize>,
     camera_moves: bool,
     lens: Option<Lens>,
+    /// The materials at the range's start.
     materials: Arc<Vec<Material>>,
+    /// The materials whose animated values change within the range.
+    varying_materials: Vec<usize>,
     sphere: BoundingSphere,
 }
 
@@ -145,11 +153,16 @@ fn emission(geometry: &Geometry, t: &TriangleRef, material: &Material) -> Option
     })))
 }
 
-/// A punctual light posed with its node's world matrix (the sphere is set by the pose).
-fn punctual(light: &PunctualLight, world: Mat4) -> Light {
+/// A punctual light at `time`, posed with its node's world matrix (the sphere is set by the pose).
+fn punctual(light: &PunctualLight, rig: &Rig, time: f32) -> Light {
+    let world = rig.world(light.node, time);
     let position = world.transform_point3(Vec3::ZERO);
     let axis = world.transform_vector3(-Vec3::Z).normalize();
-    match &light.kind {
+    let mut kind = Cow::Borrowed(&light.kind);
+    if let Some(animation) = &light.animation {
+        animation.apply(kind.to_mut(), time);
+    }
+    match kind.as_ref() {
         PunctualKind::Sphere(sphere) => Light::Sphere(SphereLight {
             position,
             beam: sphere.beam.map(|beam| Beam { axis, ..beam }),
@@ -157,6 +170,43 @@ fn punctual(light: &PunctualLight, world: Mat4) -> Light {
         }),
         PunctualKind::Sun(irradiance, disc) => {
             Light::Sun { direction: axis, irradiance: *irradiance, disc: *disc, sphere: Default::default() }
+        }
+    }
+}
+
+/// The indices of the materials whose animated values change within `range`, and every
+/// material at the range's start.
+fn materials_over(description: &Description, range: TimeRange) -> (Vec<usize>, Vec<Material>) {
+    let mut materials = description.materials.clone();
+    let mut varying = Vec::new();
+    for (m, animation) in &description.material_animations {
+        animation.apply(&mut materials[*m], range.start);
+        if animation.tracks.vary_within(range.start, range.end) {
+            varying.push(*m);
+        }
+    }
+    (varying, materials)
+}
+
+/// Every material with its emission at its peak, if any emission is animated.
+fn peak_materials(description: &Description) -> Option<Vec<Material>> {
+    let emitting = description.material_animations.iter().filter(|(_, a)| a.may_emit());
+    let mut materials = None;
+    for (m, animation) in emitting {
+        let all = materials.get_or_insert_with(|| description.materials.clone());
+        animation.peak(&mut all[*m]);
+    }
+    materials
+}
+
+/// The power of `light` at its peak (at `time`, where only its pose matters).
+fn peak_power(light: &PunctualLight, rig: &Rig, time: f32) -> f64 {
+    match &light.animation {
+        None => punctual(light, rig, time).power(),
+        Some(animation) => {
+            let mut kind = light.kind.clone();
+            animation.peak(&mut kind);
+            punctual(&PunctualLight { kind, animation: None, node: light.node }, rig, time).power()
         }
     }
 }
@@ -214,17 +264,31 @@ impl Prepared {
             let changes = |d: &Deformation| d.changes_within(rig, mesh.node, range.start, range.end);
             moves(mesh.node) || mesh.deformation.as_deref().is_some_and(changes)
         };
-        let (moving_meshes, fixed_meshes): (Vec<usize>, Vec<usize>) =
-            (0..description.meshes.len()).partition(|&m| mesh_moves(&description.meshes[m]));
+        let (varying_materials, materials) = materials_over(&description, range);
+        let mut material_varies = vec![false; description.materials.len()];
+        varying_materials.iter().for_each(|&m| material_varies[m] = true);
+        let varying_material =
+            |mesh: &MeshInstance| mesh.triangles.iter().any(|t| material_varies[t.material as usize]);
+        let (moving_meshes, fixed_meshes): (Vec<usize>, Vec<usize>) = (0..description.meshes.len())
+            .partition(|&m| mesh_moves(&description.meshes[m]) || varying_material(&description.meshes[m]));
+        let light_moves = |light: &PunctualLight| {
+            let animated =
+                light.animation.as_ref().is_some_and(|a| a.tracks.vary_within(range.start, range.end));
+            moves(light.node) || animated
+        };
         let (moving_lights, fixed_punctual): (Vec<usize>, Vec<usize>) =
-            (0..description.lights.len()).partition(|&l| moves(description.lights[l].node));
+            (0..description.lights.len()).partition(|&l| light_moves(&description.lights[l]));
         let fixed = flatten_at(&description, &fixed_meshes, range.start);
-        let mut fixed_lights: Vec<Light> = fixed_punctual
-            .iter()
-            .map(|&l| punctual(&description.lights[l], rig.world(description.lights[l].node, range.start)))
-            .collect();
-        let (emitters, fixed_triangle_lights) =
-            triangle_lights(&fixed, &description.materials, fixed_lights.len());
+        let mut fixed_lights: Vec<Light> =
+            fixed_punctual.iter().map(|&l| punctual(&description.lights[l], rig, range.start)).collect();
+        let peak_materials = peak_materials(&description);
+        let fixed_punctual_peaks =
+            fixed_punctual.iter().map(|&l| peak_power(&description.lights[l], rig, range.start));
+        let fixed_emitter_peaks = peak_materials.as_ref().map(|peak| triangle_lights(&fixed, peak, 0).0);
+        let (emitters, fixed_triangle_lights) = triangle_lights(&fixed, &materials, fixed_lights.len());
+        let fixed_emitter_peaks = fixed_emitter_peaks.unwrap_or_else(|| emitters.clone());
+        let fixed_choice_powers =
+            fixed_punctual_peaks.chain(fixed_emitter_peaks.iter().map(Light::power)).collect();
         fixed_lights.extend(emitters);
         // Distant lights aim their photons at one sphere for the whole range, so that a photon
         // path from the sun is the same in every frame (reuse across frames).
@@ -233,13 +297,18 @@ impl Prepared {
         let sphere = bounding_sphere(fixed.bounds().into_iter().chain(swept));
         let open_edges = Arc::new(OpenEdges::of(&fixed, sphere.radius * DEFAULT_RADIUS_FRACTION as f32));
         let moving_open_sides = OpenSides::of(&flatten_at(&description, &moving_meshes, range.start));
+        let camera = &description.camera;
+        let zooms = camera.animation.as_ref().is_some_and(|a| a.tracks.vary_within(range.start, range.end));
         Prepared {
-            camera_moves: moves(description.camera.node),
-            materials: Arc::new(description.materials.clone()),
+            camera_moves: moves(camera.node) || zooms,
+            materials: Arc::new(materials),
+            varying_materials,
             description,
             range,
             fixed: Arc::new(fixed),
             fixed_lights,
+            fixed_choice_powers,
+            peak_materials,
             fixed_triangle_lights: Arc::new(fixed_triangle_lights),
             open_edges,
             moving_open_sides,
@@ -260,12 +329,20 @@ impl Prepared {
         self.camera_moves
     }
 
-    /// Whether lights move within the range.
+    /// Whether lights move (or change) within the range.
     pub fn lights_move(&self) -> bool {
+        let may_emit = |m: usize| {
+            self.materials[m].emission.is_some()
+                || self
+                    .description
+                    .material_animations
+                    .iter()
+                    .any(|(a, animation)| *a == m && animation.may_emit())
+        };
         !self.moving_lights.is_empty()
             || self.moving_meshes.iter().any(|&m| {
                 let mesh = &self.description.meshes[m];
-                mesh.triangles.iter().any(|t| self.materials[t.material as usize].emission.is_some())
+                mesh.triangles.iter().any(|t| may_emit(t.material as usize))
             })
     }
 
@@ -277,12 +354,58 @@ impl Prepared {
 
     /// The fixed part's BVH (built once).
     pub fn fixed_bvh(&self) -> Bvh {
-        self.fixed.bvh(&self.description.materials, BuildFor::Range)
+        self.fixed.bvh(&self.materials, BuildFor::Range)
     }
 
     /// The lens on the camera.
     pub fn lens(&self) -> Option<Lens> {
         self.lens
+    }
+
+    /// The powers by which photons choose among `powers`' lights at `time` (`moving` the moving
+    /// triangles then): animated lights' at their peaks (see `fixed_choice_powers`).
+    fn choice_powers(&self, mut powers: Vec<f64>, moving: &Geometry, time: f32) -> Vec<f64> {
+        let d = &self.description;
+        if self.peak_materials.is_none() && d.lights.iter().all(|l| l.animation.is_none()) {
+            return powers;
+        }
+        let fixed = self.fixed_lights.len();
+        powers[..fixed].copy_from_slice(&self.fixed_choice_powers);
+        let moving_punctual = self.moving_lights.iter().map(|&l| peak_power(&d.lights[l], &d.rig, time));
+        let emitters = match &self.peak_materials {
+            Some(peak) => triangle_lights(moving, peak, 0).0.iter().map(Light::power).collect(),
+            None => powers[fixed + self.moving_lights.len()..].to_vec(),
+        };
+        let end = powers.len() - usize::from(d.world.is_some());
+        let choice: Vec<f64> = moving_punctual.chain(emitters).collect();
+        powers[fixed..end].copy_from_slice(&choice);
+        powers
+    }
+
+    /// The materials at `time`: those of the range's start, with the varying ones changed.
+    fn materials_at(&self, time: f32) -> Arc<Vec<Material>> {
+        if self.varying_materials.is_empty() {
+            return Arc::clone(&self.materials);
+        }
+        let mut materials = (*self.materials).clone();
+        for (m, animation) in &self.description.material_animations {
+            if self.varying_materials.contains(m) {
+                animation.apply(&mut materials[*m], time);
+            }
+        }
+        Arc::new(materials)
+    }
+
+    /// The camera at `time`: its node's pose, its field of view, and its lens's aperture grown
+    /// with the focal length (a zoom keeps the f-number).
+    fn camera_at(&self, time: f32) -> Camera {
+        let c = &self.description.camera;
+        let (projection, zoom) = match &c.animation {
+            Some(animation) => animation.projection(c.projection, time),
+            None => (c.projection, 1.0),
+        };
+        let lens = self.lens.map(|l| Lens { aperture_radius: l.aperture_radius * zoom, ..l });
+        Camera::from_node(self.description.rig.world(c.node, time), projection, c.shift).with_lens(lens)
     }
 
     /// The scene at `time` seconds (within the range).
@@ -296,10 +419,9 @@ impl Prepared {
         };
         let mut lights = self.fixed_lights.clone();
         let first_moving_light = lights.len();
-        lights.extend(
-            self.moving_lights.iter().map(|&l| punctual(&d.lights[l], d.rig.world(d.lights[l].node, time))),
-        );
-        let (emitters, moving_triangle_lights) = triangle_lights(&moving, &self.materials, lights.len());
+        lights.extend(self.moving_lights.iter().map(|&l| punctual(&d.lights[l], &d.rig, time)));
+        let materials = self.materials_at(time);
+        let (emitters, moving_triangle_lights) = triangle_lights(&moving, &materials, lights.len());
         lights.extend(emitters);
         let moving_lights = first_moving_light..lights.len();
         let sphere = self.sphere;
@@ -326,12 +448,11 @@ impl Prepared {
         }
         let powers: Vec<f64> = lights.iter().map(Light::power).collect();
         let light_tree = Arc::new(LightTree::new(&lights, &powers));
-        let light_choice = Arc::new(Distribution1D::new(powers));
-        let camera_world = d.rig.world(d.camera.node, time);
+        let light_choice = Arc::new(Distribution1D::new(self.choice_powers(powers, &moving, time)));
         Scene {
             fixed: Arc::clone(&self.fixed),
             moving,
-            materials: Arc::clone(&self.materials),
+            materials,
             lights,
             fixed_triangle_lights: Arc::clone(&self.fixed_triangle_lights),
             moving_triangle_lights,
@@ -341,7 +462,7 @@ impl Prepared {
             light_choice,
             sphere_lights,
             moving_lights,
-            camera: Camera::from_node(camera_world, d.camera.projection, d.camera.shift).with_lens(self.lens),
+            camera: self.camera_at(time),
             resolution: d.resolution,
             aspect_ratio: d.camera.aspect_ratio,
             transparent_film: d.transparent_film,

@@ -3,10 +3,10 @@ tests/references/parity/<scene>.exr, and their provenance into tests/references/
 
     target/bpy-venv/bin/python tests/addon/make_parity_references.py [--samples 4096] [SCENE ...]
 
-Cycles on the CPU, the scene's 64x64, a 1-pixel box filter, no denoising, no adaptive sampling,
+Cycles on the CPU, the scene's resolution (64x64 for most), a 1-pixel box filter, no denoising, no adaptive sampling,
 no glossy filter, no clamping (Blender's default clamps indirect samples at 10, which darkens
 caustics: light under a clear glass block read 19% of Cycles' own unclamped value), 32 bounces of
-every kind; each EXR holds `Combined.R/G/B` and `Index.X` (the
+every kind; a scene of parity_scenes.FRAMES gets one reference a frame, <scene>_<frame>.exr; each EXR holds `Combined.R/G/B` and `Index.X` (the
 object-index pass: which object each pixel sees), and for the scenes of parity_scenes.ALPHA
 `Alpha.X` (Cycles' alpha).
 """
@@ -64,20 +64,29 @@ def main():
     provenance = json.loads(provenance_path.read_text()) if provenance_path.exists() else {}
     for name in args.scenes:
         parity_scenes.SCENES[name]()
-        with tempfile.TemporaryDirectory() as tmp:
-            rgb, alpha, index = render_cycles(args.samples, pathlib.Path(tmp) / "cycles.exr")
-        channels = {"Combined": rgb.astype(np.float32), "Index.X": index.astype(np.float32)}
-        if name in parity_scenes.ALPHA:
-            channels["Alpha.X"] = alpha.astype(np.float32)
-        OpenEXR.File({"compression": OpenEXR.ZIP_COMPRESSION}, channels).write(str(OUT / f"{name}.exr"))
+        frames = parity_scenes.FRAMES.get(name)
+        for frame in frames or [None]:
+            if frame is not None:
+                bpy.context.scene.frame_set(frame)
+            with tempfile.TemporaryDirectory() as tmp:
+                rgb, alpha, index = render_cycles(args.samples, pathlib.Path(tmp) / "cycles.exr")
+            channels = {"Combined": rgb.astype(np.float32), "Index.X": index.astype(np.float32)}
+            if name in parity_scenes.ALPHA:
+                channels["Alpha.X"] = alpha.astype(np.float32)
+            file = f"{name}.exr" if frame is None else f"{name}_{frame}.exr"
+            OpenEXR.File({"compression": OpenEXR.ZIP_COMPRESSION}, channels).write(str(OUT / file))
+            print(f"{file}: mean {rgb.mean(axis=(0, 1))}")
+        scene = bpy.context.scene
         provenance[name] = {
             "renderer": f"Cycles (bpy {bpy.app.version_string}), CPU",
             "samples": args.samples,
-            "settings": "64x64, 1-pixel box filter, no denoising, no adaptive sampling, no glossy filter, no clamping, 32 bounces",
+            "settings": f"{scene.render.resolution_x}x{scene.render.resolution_y}, 1-pixel box filter, no denoising, "
+                        "no adaptive sampling, no glossy filter, no clamping, 32 bounces",
             "scene": f"tests/addon/parity_scenes.py: {name}()",
             "made": datetime.date.today().isoformat(),
         }
-        print(f"{name}: mean {rgb.mean(axis=(0, 1))}")
+        if frames:
+            provenance[name]["frames"] = frames
     provenance_path.write_text(json.dumps(provenance, indent=1, sort_keys=True) + "\n")
 
 

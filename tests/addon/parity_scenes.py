@@ -641,14 +641,9 @@ def sky():
     return {"Floor": 1, "Grey": 2, "White": 3, "Sky": 0}
 
 
-def rigged():
-    """A column bent by a two-bone armature and a box raised by a shape key, both animated and
-    seen at a frame between their keys, as black silhouettes against a white world (64 x 48)."""
-    scene = silhouettes((64, 48))
-    for obj in list(bpy.data.objects):
-        bpy.data.objects.remove(obj)
-    black = bpy.data.materials["Black"]
-    column = add(bpy.ops.mesh.primitive_cylinder_add, black, index=1, vertices=16, radius=0.2, depth=2.0,
+def bent_column(material, index, last_frame):
+    """A column on the floor at x = -0.8 bent by a two-bone armature from frame 1 to `last_frame`."""
+    column = add(bpy.ops.mesh.primitive_cylinder_add, material, index=index, vertices=16, radius=0.2, depth=2.0,
                  location=(-0.8, 0.0, 1.0))
     bpy.ops.object.mode_set(mode='EDIT')
     bpy.ops.mesh.select_all(action='SELECT')
@@ -666,23 +661,76 @@ def rigged():
     bpy.ops.object.parent_set(type='ARMATURE_AUTO')
     bend = rig.pose.bones["Upper"]
     bend.rotation_mode = 'XYZ'
-    for frame, angle in ((1, 0.0), (9, 80.0)):
+    for frame, angle in ((1, 0.0), (last_frame, 80.0)):
         bend.rotation_euler = (math.radians(angle), 0.0, math.radians(angle) / 2)
         bend.keyframe_insert("rotation_euler", frame=frame)
-    box = add(bpy.ops.mesh.primitive_cube_add, black, index=2, size=0.8, location=(1.0, 0.5, 0.4))
+
+
+def raised_box(material, index, last_frame):
+    """A box on the floor at x = 1 sheared upward by a shape key from frame 1 to `last_frame`."""
+    box = add(bpy.ops.mesh.primitive_cube_add, material, index=index, size=0.8, location=(1.0, 0.5, 0.4))
     box.shape_key_add(name="Basis")
     tall = box.shape_key_add(name="Tall")
     for point in tall.data:
         point.co.z += 1.2 if point.co.z > 0 else 0.0
         point.co.x += 0.6 if point.co.z > 0 else 0.0
-    for frame, value in ((1, 0.0), (9, 1.0)):
+    for frame, value in ((1, 0.0), (last_frame, 1.0)):
         tall.value = value
         tall.keyframe_insert("value", frame=frame)
+
+
+def rigged():
+    """A column bent by a two-bone armature and a box raised by a shape key, both animated and
+    seen at a frame between their keys, as black silhouettes against a white world (64 x 48)."""
+    scene = silhouettes((64, 48))
+    for obj in list(bpy.data.objects):
+        bpy.data.objects.remove(obj)
+    black = bpy.data.materials["Black"]
+    bent_column(black, 1, 9)
+    raised_box(black, 2, 9)
     scene.frame_start, scene.frame_end = 1, 9
     scene.frame_set(5)
     camera((5.0, -7.0, 3.0), (0.0, 0.0, 1.0))
     return {"World": 0}
 
+
+def animated():
+    """Everything that moves in an ordinary shot, keyed from frame 1 to 10 and seen at frames 1, 5
+    and 10 (FRAMES) through Render Animation: an armature-bent column and a shape-keyed box (black,
+    as silhouettes on the floor), a glowing panel whose Emission Strength is keyed, a sun whose
+    strength is keyed and a camera that zooms from 30 to 60 mm, over a white floor under a grey
+    world (96 x 72)."""
+    scene = clear()
+    scene.render.resolution_x, scene.render.resolution_y = 96, 72
+    world((0.3, 0.3, 0.3))
+    white = principled("White", Base_Color=(0.8, 0.8, 0.8, 1.0), Specular_IOR_Level=0.0, Roughness=1.0)
+    black = principled("Black", Base_Color=(0.0, 0.0, 0.0, 1.0), Specular_IOR_Level=0.0, Roughness=1.0)
+    add(bpy.ops.mesh.primitive_plane_add, white, index=1, size=30)
+    bent_column(black, 2, 10)
+    raised_box(black, 3, 10)
+    glow = principled("Glow", Base_Color=(0.0, 0.0, 0.0, 1.0), Specular_IOR_Level=0.0,
+                      Emission_Color=(1.0, 0.6, 0.2, 1.0), Emission_Strength=0.5)
+    add(bpy.ops.mesh.primitive_plane_add, glow, index=4, size=1.0, location=(0.1, 1.2, 1.0),
+        rotation=(math.radians(90), 0.0, math.radians(34)))
+    strength = glow.node_tree.nodes["Principled BSDF"].inputs["Emission Strength"]
+    sun = add(bpy.ops.object.light_add, type='SUN', rotation=(math.radians(30), 0.0, math.radians(20)))
+    for frame, emission, power in ((1, 0.5, 1.0), (10, 2.0, 5.0)):
+        strength.default_value = emission
+        strength.keyframe_insert("default_value", frame=frame)
+        sun.data.energy = power
+        sun.data.keyframe_insert("energy", frame=frame)
+    lens = camera((4.0, -6.0, 2.5), (0.0, 0.5, 0.8), lens=30.0).data
+    for frame, millimetres in ((1, 30.0), (10, 60.0)):
+        lens.lens = millimetres
+        lens.keyframe_insert("lens", frame=frame)
+    scene.frame_start, scene.frame_end = 1, 10
+    scene.frame_set(1)
+    return {"Floor": 1, "Glow": 4}
+
+
+# Scenes rendered through Render Animation and compared at several frames (each frame's reference
+# is <scene>_<frame>.exr); their dark silhouettes must overlap Cycles' (intersection over union).
+FRAMES = {"animated": [1, 5, 10]}
 
 # Scenes whose alpha (a transparent film, holdouts) must match Cycles': a mean absolute difference
 # under 0.02 over the image and no pixel's over 0.25 (noise is under 0.1 at these sample counts;
@@ -712,4 +760,4 @@ SCENES = {"glass": glass, "principled_spheres": principled_spheres, "textured": 
           "hdri": hdri, "ortho_camera": ortho_camera, "shifted_camera": shifted_camera,
           "panorama_camera": panorama_camera, "film_and_holdouts": film_and_holdouts,
           "spot_light": spot_light, "soft_spot": soft_spot, "sky": sky, "lights_seen": lights_seen,
-          "spread_light": spread_light, "soft_falloff": soft_falloff, "rigged": rigged}
+          "spread_light": spread_light, "soft_falloff": soft_falloff, "rigged": rigged, "animated": animated}

@@ -49,6 +49,28 @@ def render_caustic(name):
     return rgba[..., :3], rgba[..., 3]
 
 
+def render_animation(name):
+    """Renders the scene's frame range through Render Animation; gives each frame's RGB."""
+    scene = bpy.context.scene
+    scene.render.engine = 'CAUSTIC'
+    scene.caustic.passes = parity_scenes.PASSES.get(name, PASSES)
+    scene.render.image_settings.media_type = 'IMAGE'
+    scene.render.image_settings.file_format = 'OPEN_EXR'
+    scene.render.image_settings.color_depth = '32'
+    scene.render.filepath = str(OUT / f"{name}_####")
+    bpy.ops.render.render(animation=True)
+    read = lambda frame: OpenEXR.File(str(OUT / f"{name}_{frame:04d}.exr")).channels()["RGBA"].pixels
+    return {frame: read(frame)[..., :3].astype(np.float64) for frame in parity_scenes.FRAMES[name]}
+
+
+def silhouette_iou(image, reference):
+    """The intersection over union of the two images' dark silhouettes (under a quarter of the
+    reference's median luminance), and how many pixels the reference's covers."""
+    threshold = 0.25 * np.median(reference @ LUMINANCE)
+    ours, theirs = image @ LUMINANCE < threshold, reference @ LUMINANCE < threshold
+    return float((ours & theirs).sum() / max((ours | theirs).sum(), 1)), int(theirs.sum())
+
+
 def read_reference(name):
     channels = OpenEXR.File(str(REFERENCES / f"{name}.exr")).channels()
     alpha = channels["Alpha.X"].pixels.astype(np.float64) if "Alpha.X" in channels else None
@@ -100,6 +122,39 @@ def save_sheet(name, image, reference):
 
 
 class Parity(unittest.TestCase):
+    def check_frames(self, name):
+        """Each frame of parity_scenes.FRAMES[name], rendered in one Render Animation: every named
+        object's mean within 5% of Cycles', the silhouettes' intersection over union at least 0.97,
+        and the block median difference under 5%."""
+        objects = parity_scenes.SCENES[name]()
+        images = render_animation(name)
+        failures = []
+        for frame, image in images.items():
+            reference, index, _ = read_reference(f"{name}_{frame}")
+            sheet = save_sheet(f"{name}_{frame}", image, reference)
+            for obj, value in objects.items():
+                mask = parity_scenes.interior(index, value)
+                self.assertGreater(mask.sum(), 20, f"{name} frame {frame}: '{obj}' covers too few pixels")
+                ours, theirs = image[mask].mean(axis=0), reference[mask].mean(axis=0)
+                ratio = ours / np.maximum(theirs, 1e-6)
+                print(f"{name} frame {frame}: '{obj}' Caustic {ours.round(4)} Cycles {theirs.round(4)} "
+                      f"ratio {ratio.round(3)}")
+                if np.any(np.abs(ratio - 1) > TOLERANCE):
+                    failures.append(f"frame {frame} '{obj}': Caustic {ours} against Cycles {theirs}")
+            iou, covered = silhouette_iou(image, reference)
+            median = block_median_difference(image, reference)
+            print(f"{name} frame {frame}: silhouettes' intersection over union {iou:.3f} ({covered} pixels), "
+                  f"block median difference {median:.4f} (sheet {sheet})")
+            self.assertGreater(covered, 100, f"{name} frame {frame}: the silhouettes cover too few pixels")
+            if iou < 0.97:
+                failures.append(f"frame {frame}: silhouettes' intersection over union {iou:.3f}")
+            if median > TOLERANCE:
+                failures.append(f"frame {frame}: block median difference {median:.3f}")
+        self.assertEqual(failures, [], f"{name} differs from Cycles (sheets in {OUT})")
+
+    def test_animated(self):
+        self.check_frames("animated")
+
     def check(self, name):
         objects = parity_scenes.SCENES[name]()
         tolerance = parity_scenes.TOLERANCES.get(name, TOLERANCE)

@@ -256,6 +256,27 @@ impl GltfBuilder {
         }));
     }
 
+    /// Animates the value at JSON `pointer` (`KHR_animation_pointer`) with keys at `times`
+    /// (seconds), `values` a key each (one to four floats).
+    pub fn animate_pointer(
+        &mut self,
+        pointer: &str,
+        times: &[f32],
+        values: &[Vec<f32>],
+        interpolation: &str,
+    ) {
+        let input = self.add_accessor(times, 1, "SCALAR");
+        let width = values[0].len();
+        let flat: Vec<f32> = values.iter().flatten().copied().collect();
+        let kind = ["SCALAR", "VEC2", "VEC3", "VEC4"][width - 1];
+        let output = self.add_accessor(&flat, width, kind);
+        self.animations.push(json!({
+            "channels": [{"sampler": 0, "target": {"path": "pointer",
+                "extensions": {"KHR_animation_pointer": {"pointer": pointer}}}}],
+            "samplers": [{"input": input, "output": output, "interpolation": interpolation}]
+        }));
+    }
+
     /// Adds an image file (relative `uri`) as a texture and returns the texture's index.
     pub fn texture(&mut self, uri: &str) -> usize {
         self.images.push(json!({"uri": uri}));
@@ -412,6 +433,10 @@ impl GltfBuilder {
             used.insert("KHR_lights_punctual".into());
             doc["extensions"] = json!({"KHR_lights_punctual": {"lights": self.lights}});
         }
+        let pointers = self.animations.iter().flat_map(|a| a["channels"].as_array().unwrap());
+        if pointers.into_iter().any(|c| c["target"]["path"] == "pointer") {
+            used.insert("KHR_animation_pointer".into());
+        }
         if !used.is_empty() {
             doc["extensionsUsed"] = json!(used);
         }
@@ -460,6 +485,47 @@ impl GltfBuilder {
         std::fs::write(&path, serde_json::to_string_pretty(&self.to_json()).unwrap()).unwrap();
         path
     }
+}
+
+/// A floor lit by a point light and an area light, a glowing square and a camera, with their
+/// values animated: the light's intensity and colour, the square's emission strength and the
+/// camera's field of view by `KHR_animation_pointer`, the area light's power by the
+/// `caustic.tracks` extras. The hostile-input suite breaks it and the fuzzer mutates it.
+pub fn animated_values() -> Value {
+    let mut gltf = GltfBuilder::default();
+    let grey = gltf.material(diffuse([0.5, 0.5, 0.5]));
+    gltf.quad_y("Floor", 0.0, 2.0, true, grey);
+    let glow = gltf.material(json!({"name": "Glow", "emissiveFactor": [1.0, 0.8, 0.6],
+        "extensions": {"KHR_materials_emissive_strength": {"emissiveStrength": 2.0}}}));
+    gltf.quad_y("Glow", 0.01, 0.3, true, glow);
+    gltf.light(json!({"type": "point", "intensity": 100.0}), [0.8, 1.5, 0.0], [0.0, -1.0, 0.0]);
+    let area =
+        json!({"area_light": {"shape": "SQUARE", "size": 0.5, "power": 20.0, "color": [1.0, 1.0, 1.0]}});
+    gltf.extras_node("Area", area, [-0.8, 1.5, 0.0], [0.0, -1.0, 0.0]);
+    let area = gltf.last_node();
+    gltf.camera([0.0, 4.0, 0.01], [0.0, -1.0, 0.0], 0.9);
+    let times = [0.0, 1.0];
+    let pair = |a: f32, b: f32| [vec![a], vec![b]];
+    gltf.animate_pointer(
+        "/extensions/KHR_lights_punctual/lights/0/intensity",
+        &times,
+        &pair(100.0, 400.0),
+        "LINEAR",
+    );
+    gltf.animate_pointer(
+        "/extensions/KHR_lights_punctual/lights/0/color",
+        &times,
+        &[vec![1.0, 1.0, 1.0], vec![1.0, 0.5, 0.2]],
+        "STEP",
+    );
+    let strength = format!("/materials/{glow}/extensions/KHR_materials_emissive_strength/emissiveStrength");
+    gltf.animate_pointer(&strength, &times, &pair(2.0, 6.0), "LINEAR");
+    gltf.animate_pointer("/cameras/0/perspective/yfov", &times, &pair(0.9, 0.5), "LINEAR");
+    gltf.scene_extras(
+        json!({"fps": 24.0, "tracks": [{"pointer": format!("/nodes/{area}/extras/caustic/area_light/power"),
+        "times": times, "values": [20.0, 60.0]}]}),
+    );
+    gltf.to_json()
 }
 
 /// A lit floor and a skinned square (two joints, one animated) with a morph target whose weight
