@@ -439,7 +439,34 @@ fn hostile_animated_values_are_refused() {
         d["animations"][0]["channels"][0]["target"]["extensions"]["KHR_animation_pointer"]["pointer"] =
             json!(p)
     };
-    let cases: [(&str, &dyn Fn(&mut Value), &[&str]); 8] = [
+    let instancing = |d: &mut Value, key: &str, value: Value| {
+        d["nodes"][1]["extensions"]["EXT_mesh_gpu_instancing"]["attributes"][key] = value
+    };
+    let attribute = |d: &Value, key: &str| {
+        d["nodes"][1]["extensions"]["EXT_mesh_gpu_instancing"]["attributes"][key].clone()
+    };
+    let cases: [(&str, &dyn Fn(&mut Value), &[&str]); 11] = [
+        (
+            "instances_of_no_accessor.gltf",
+            &|d| instancing(d, "SCALE", json!(999)),
+            &["node 'Glow' EXT_mesh_gpu_instancing", "SCALE names accessor 999"],
+        ),
+        (
+            "instances_counted_twice.gltf",
+            &|d| {
+                let accessor = attribute(d, "TRANSLATION").as_u64().unwrap() as usize;
+                d["accessors"][accessor]["count"] = json!(2);
+            },
+            &["node 'Glow' EXT_mesh_gpu_instancing", "different instance counts ([2, 3, 3])"],
+        ),
+        (
+            "instances_of_wrong_width.gltf",
+            &|d| {
+                let rotation = attribute(d, "ROTATION");
+                instancing(d, "TRANSLATION", rotation)
+            },
+            &["node 'Glow' EXT_mesh_gpu_instancing", "TRANSLATION must hold 3 floats an instance"],
+        ),
         (
             "no_such_light.gltf",
             &|d| pointer(d, "/extensions/KHR_lights_punctual/lights/3/intensity"),

@@ -18,7 +18,7 @@ use std::sync::Arc;
 use super::deform::{self, Deformation, Morph, MorphTarget, Skin, Skinning};
 use super::pointers::{self, Animations, Keys, NodeProperty};
 use super::values::{CameraAnimation, LightAnimation, MaterialAnimation};
-use super::{gltf_checks, gltf_unrendered};
+use super::{gltf_checks, gltf_unrendered, instancing};
 
 use glam::{Mat4, Quat, Vec2, Vec3, Vec4};
 use gltf::animation::util::ReadOutputs;
@@ -42,6 +42,7 @@ const LUMENS_PER_WATT: f32 = 683.0;
 
 /// What the node walk gathers before the description is assembled.
 struct Builder<'a> {
+    document: &'a gltf::Document,
     buffers: &'a [gltf::buffer::Data],
     materials: Vec<Material>,
     meshes: Vec<MeshInstance>,
@@ -105,6 +106,7 @@ pub fn load(path: &Path) -> Result<Description, SceneError> {
         document.materials().flat_map(|m| gltf_unrendered::material_warnings(&m)).collect();
     unrendered.extend(animations.warnings.iter().cloned());
     let mut builder = Builder {
+        document: &document,
         buffers: &buffers,
         materials,
         meshes: Vec::new(),
@@ -383,7 +385,6 @@ impl Builder<'_> {
         let name = node.name().unwrap_or("unnamed");
         let extras: NodeExtras =
             extras::parse(node.extras()).map_err(|e| format!("node '{name}' extras `caustic`: {e}"))?;
-        self.warnings.extend(gltf_unrendered::node_warnings(node));
         if let Some(mesh) = node.mesh() {
             let first_instance = self.meshes.len();
             self.add_mesh(&mesh, node)?;
@@ -632,6 +633,36 @@ impl Builder<'_> {
         let skin = node.skin().map(|skin| self.skin(&skin, node.name().unwrap_or("unnamed"))).transpose()?;
         self.add_primitives(mesh, node, skin, name)?;
         self.thin_walls_of_open_glass(first, name);
+        if let Some(matrices) = instancing::matrices(node, self.document, self.buffers)? {
+            self.add_instances(first, &matrices, node.name().unwrap_or("unnamed"))?;
+        }
+        Ok(())
+    }
+
+    /// Replaces the mesh instances from `first` on with one copy per instance transform of
+    /// `matrices` (`EXT_mesh_gpu_instancing` on node `name`).
+    fn add_instances(&mut self, first: usize, matrices: &[Mat4], name: &str) -> Result<(), String> {
+        if self.meshes[first..].iter().any(|m| m.deformation.is_some()) {
+            self.warnings.push(format!(
+                "node '{name}': instances of a deforming mesh are not rendered (one is drawn, without {})",
+                instancing::EXTENSION
+            ));
+            return Ok(());
+        }
+        let triangles: usize = self.meshes[first..].iter().map(|m| m.triangles.len()).sum();
+        let total = triangles.saturating_mul(matrices.len());
+        if total > instancing::MAX_EXPANDED_TRIANGLES {
+            return Err(format!(
+                "node '{name}' {}: {} instances of {triangles} triangles make {total} triangles, more than the {} Caustic expands instances into",
+                instancing::EXTENSION,
+                matrices.len(),
+                instancing::MAX_EXPANDED_TRIANGLES
+            ));
+        }
+        let originals: Vec<MeshInstance> = self.meshes.drain(first..).collect();
+        for &m in matrices {
+            self.meshes.extend(originals.iter().map(|mesh| instancing::transformed(mesh, m)));
+        }
         Ok(())
     }
 

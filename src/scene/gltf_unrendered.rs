@@ -87,13 +87,3 @@ fn unrendered_textures(m: &gltf::Material) -> Vec<String> {
         })
         .collect()
 }
-
-/// One line for each thing on node `node` that is not rendered.
-pub fn node_warnings(node: &gltf::Node) -> Vec<String> {
-    let name = node.name().unwrap_or("unnamed");
-    let mut unrendered: Vec<&str> = Vec::new();
-    if node.extension_value("EXT_mesh_gpu_instancing").is_some() {
-        unrendered.push("EXT_mesh_gpu_instancing is not rendered: one instance is drawn");
-    }
-    unrendered.into_iter().map(|what| format!("node '{name}': {what}")).collect()
-}

@@ -17,6 +17,7 @@ mod gltf_loader;
 mod gltf_materials;
 mod gltf_textures;
 mod gltf_unrendered;
+mod instancing;
 pub mod pointers;
 pub mod pose;
 mod shapes;

@@ -77,10 +77,15 @@ pub struct Keys {
     pub interpolation: Interpolation,
 }
 
-/// The file's bytes without pointer channels (so that the gltf crate reads it), and those
-/// channels; the bytes are borrowed unchanged where there are none.
+/// The extensions Caustic reads from the raw JSON, which the gltf crate would refuse as required.
+const READ_RAW: [&str; 2] = [EXTENSION, super::instancing::EXTENSION];
+
+/// The file's bytes without pointer channels (so that the gltf crate reads it) and with the
+/// extensions Caustic reads raw out of `extensionsRequired`, and the pointer channels; the bytes
+/// are borrowed unchanged where neither extension is named.
 pub fn strip(bytes: &[u8]) -> Result<(Cow<'_, [u8]>, Vec<PointerChannel>), String> {
-    if !bytes.windows(EXTENSION.len()).any(|w| w == EXTENSION.as_bytes()) {
+    let names = |name: &str| bytes.windows(name.len()).any(|w| w == name.as_bytes());
+    if !READ_RAW.iter().any(|name| names(name)) {
         return Ok((Cow::Borrowed(bytes), Vec::new()));
     }
     if bytes.starts_with(b"glTF") {
@@ -124,10 +129,8 @@ fn strip_json(json: &[u8]) -> Result<(Vec<u8>, Vec<PointerChannel>), String> {
             *channels = kept;
         }
     }
-    for list in ["extensionsUsed", "extensionsRequired"] {
-        if let Some(names) = root.get_mut(list).and_then(Value::as_array_mut) {
-            names.retain(|n| n.as_str() != Some(EXTENSION));
-        }
+    if let Some(names) = root.get_mut("extensionsRequired").and_then(Value::as_array_mut) {
+        names.retain(|n| !READ_RAW.iter().any(|raw| n.as_str() == Some(raw)));
     }
     let bytes = serde_json::to_vec(&root).map_err(|e| format!("cannot rewrite the JSON: {e}"))?;
     Ok((bytes, found))
@@ -200,7 +203,7 @@ fn channel_keys(
 }
 
 /// Every float of `accessor` (a float scalar or vector in a buffer view, not sparse), flat.
-fn floats(accessor: gltf::Accessor, buffers: &[gltf::buffer::Data]) -> Result<Vec<f32>, String> {
+pub fn floats(accessor: gltf::Accessor, buffers: &[gltf::buffer::Data]) -> Result<Vec<f32>, String> {
     let index = accessor.index();
     let bad = || format!("accessor {index} must hold float scalars or vectors in a buffer view (not sparse)");
     let view = accessor.view().filter(|_| accessor.sparse().is_none()).ok_or_else(bad)?;

@@ -111,6 +111,8 @@ pub struct GltfBuilder {
     animations: Vec<Value>,
     skins: Vec<Value>,
     scene_extras: Option<Value>,
+    /// Nodes that are children of others (not roots of the scene).
+    children: std::collections::BTreeSet<usize>,
 }
 
 /// The quaternion (x, y, z, w) that turns local -z (where cameras and lights point) to `dir`.
@@ -277,6 +279,45 @@ impl GltfBuilder {
         }));
     }
 
+    /// Sets node `node`'s transform (`translation`, `rotation`, `scale` fields).
+    pub fn set_node_transform(&mut self, node: usize, transform: Value) {
+        for (key, value) in transform.as_object().unwrap() {
+            self.nodes[node][key] = value.clone();
+        }
+    }
+
+    /// Takes node `node`'s mesh away (the node stays).
+    pub fn remove_mesh(&mut self, node: usize) {
+        self.nodes[node].as_object_mut().unwrap().remove("mesh");
+    }
+
+    /// Adds `child` as a child of node `parent` (not a root of the scene) and returns its index.
+    pub fn child_node(&mut self, parent: usize, child: Value) -> usize {
+        self.nodes.push(child);
+        let index = self.nodes.len() - 1;
+        let children = self.nodes[parent]["children"].as_array().cloned().unwrap_or_default();
+        self.nodes[parent]["children"] =
+            json!(children.into_iter().chain([json!(index)]).collect::<Vec<_>>());
+        self.children.insert(index);
+        index
+    }
+
+    /// Makes node `node` draw its mesh once per instance (`EXT_mesh_gpu_instancing`), at each
+    /// translation, rotation (quaternion) and scale within the node.
+    pub fn instance(
+        &mut self,
+        node: usize,
+        translations: &[[f32; 3]],
+        rotations: &[[f32; 4]],
+        scales: &[[f32; 3]],
+    ) {
+        let t = self.add_accessor(&translations.concat(), 3, "VEC3");
+        let r = self.add_accessor(&rotations.concat(), 4, "VEC4");
+        let s = self.add_accessor(&scales.concat(), 3, "VEC3");
+        self.nodes[node]["extensions"] =
+            json!({"EXT_mesh_gpu_instancing": {"attributes": {"TRANSLATION": t, "ROTATION": r, "SCALE": s}}});
+    }
+
     /// Adds an image file (relative `uri`) as a texture and returns the texture's index.
     pub fn texture(&mut self, uri: &str) -> usize {
         self.images.push(json!({"uri": uri}));
@@ -414,7 +455,7 @@ impl GltfBuilder {
         let mut doc = json!({
             "asset": {"version": "2.0", "generator": "caustic tests"},
             "scene": 0,
-            "scenes": [{"nodes": (0..self.nodes.len()).collect::<Vec<_>>()}],
+            "scenes": [{"nodes": (0..self.nodes.len()).filter(|n| !self.children.contains(n)).collect::<Vec<_>>()}],
             "nodes": self.nodes,
             "meshes": self.meshes,
             "materials": self.materials,
@@ -436,6 +477,9 @@ impl GltfBuilder {
         let pointers = self.animations.iter().flat_map(|a| a["channels"].as_array().unwrap());
         if pointers.into_iter().any(|c| c["target"]["path"] == "pointer") {
             used.insert("KHR_animation_pointer".into());
+        }
+        if self.nodes.iter().any(|n| !n["extensions"]["EXT_mesh_gpu_instancing"].is_null()) {
+            used.insert("EXT_mesh_gpu_instancing".into());
         }
         if !used.is_empty() {
             doc["extensionsUsed"] = json!(used);
@@ -487,8 +531,8 @@ impl GltfBuilder {
     }
 }
 
-/// A floor lit by a point light and an area light, a glowing square and a camera, with their
-/// values animated: the light's intensity and colour, the square's emission strength and the
+/// A floor lit by a point light and an area light, three instances of a glowing square
+/// (`EXT_mesh_gpu_instancing`) and a camera, with their values animated: the light's intensity and colour, the square's emission strength and the
 /// camera's field of view by `KHR_animation_pointer`, the area light's power by the
 /// `caustic.tracks` extras. The hostile-input suite breaks it and the fuzzer mutates it.
 pub fn animated_values() -> Value {
@@ -498,6 +542,11 @@ pub fn animated_values() -> Value {
     let glow = gltf.material(json!({"name": "Glow", "emissiveFactor": [1.0, 0.8, 0.6],
         "extensions": {"KHR_materials_emissive_strength": {"emissiveStrength": 2.0}}}));
     gltf.quad_y("Glow", 0.01, 0.3, true, glow);
+    let squares = gltf.last_node();
+    let turn = glam::Quat::from_rotation_y(0.5).to_array();
+    let identity = [0.0, 0.0, 0.0, 1.0];
+    let scales = [[1.0; 3], [0.5; 3], [-1.0, 1.0, 1.0]];
+    gltf.instance(squares, &[[0.0; 3], [0.7, 0.0, 0.0], [-0.7, 0.0, 0.3]], &[identity, turn, turn], &scales);
     gltf.light(json!({"type": "point", "intensity": 100.0}), [0.8, 1.5, 0.0], [0.0, -1.0, 0.0]);
     let area =
         json!({"area_light": {"shape": "SQUARE", "size": 0.5, "power": 20.0, "color": [1.0, 1.0, 1.0]}});
