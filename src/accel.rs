@@ -1,18 +1,24 @@
 //! Ray queries against the scene's triangles: compressed wide BVHs (obvhs' CWBVH, Ylitie et al.
 //! 2017) over world-space triangles, one for the fixed part of a time range (built once, shared)
-//! and one for the moving part (built per pose, small).
+//! and one for the moving part (built per pose, small), and a two-level one for still instanced
+//! meshes (a BVH per mesh in its own space under a BVH over the instances' boxes).
 //!
 //! Takes triangle corners; gives closest hits (triangle index, distance, barycentrics) and
 //! occlusion tests, which pass through triangles that cast no shadow (area lights). Triangle
-//! indices number the fixed part first, then the moving part, as `Scene` does.
+//! indices number the fixed part first, then the instanced triangles, then the moving part, as
+//! `Scene` does.
 
 use std::sync::{Arc, Mutex};
 use std::time::Duration;
 
 use crate::geometry::corners_scale;
-use glam::{Vec2, Vec3, Vec3A};
+use glam::{Mat3, Mat4, Vec2, Vec3, Vec3A};
 use obvhs::{
-    cwbvh::{builder::build_cwbvh_from_tris, CwBvh},
+    aabb::Aabb,
+    cwbvh::{
+        builder::{build_cwbvh, build_cwbvh_from_tris},
+        CwBvh,
+    },
     ray::{Ray, RayHit},
     triangle::Triangle,
     BvhBuildParams,
@@ -76,11 +82,150 @@ fn working_scale(corners: &[[Vec3; 3]]) -> f32 {
     2f32.powi((20 - largest.log2().ceil() as i32).clamp(-100, 100))
 }
 
+/// Where an instance's mesh lies in the world.
+#[derive(Clone, Copy, Debug)]
+pub struct Placement {
+    /// Its mesh's index.
+    pub mesh: u32,
+    /// The mesh's space to the world.
+    pub to_world: Mat4,
+    /// Its first triangle's number among the instanced ones.
+    pub first: u32,
+}
+
+/// Meshes drawn many times (a two-level BVH): one BVH per mesh in its own space, and a BVH over
+/// the instances' world boxes whose leaves carry a ray into their instance's mesh. Memory grows
+/// with the meshes, not with the instances.
+pub struct InstancedBvh {
+    meshes: Vec<Bvh>,
+    instances: Vec<Placement>,
+    /// Each instance's world to its mesh's space.
+    to_local: Vec<Mat4>,
+    top: Option<CwBvh>,
+    /// The top BVH's working coordinates over world coordinates (as [`Bvh`]'s).
+    scale: f32,
+    /// How many triangles the instances draw.
+    triangles: u32,
+}
+
+impl InstancedBvh {
+    /// The BVHs of `meshes` (each the corners of its triangles in its own space) placed by
+    /// `instances`.
+    pub fn build(meshes: &[Vec<[Vec3; 3]>], instances: &[Placement]) -> Self {
+        let boxes: Vec<(Vec3, Vec3)> =
+            instances.iter().map(|i| world_box(&meshes[i.mesh as usize], i.to_world)).collect();
+        let corners: Vec<[Vec3; 3]> = boxes.iter().map(|&(lo, hi)| [lo, hi, hi]).collect();
+        let scale = working_scale(&corners);
+        let aabbs: Vec<Aabb> =
+            boxes.iter().map(|&(lo, hi)| Aabb::new((lo * scale).into(), (hi * scale).into())).collect();
+        let top = (!aabbs.is_empty())
+            .then(|| build_cwbvh(&aabbs, BvhBuildParams::medium_build(), &mut Duration::default()));
+        InstancedBvh {
+            meshes: meshes.iter().map(|m| Bvh::build(m, &vec![true; m.len()], BuildFor::Range)).collect(),
+            to_local: instances.iter().map(|i| i.to_world.inverse()).collect(),
+            triangles: instances
+                .iter()
+                .map(|i| i.first + meshes[i.mesh as usize].len() as u32)
+                .max()
+                .unwrap_or(0),
+            instances: instances.to_vec(),
+            top,
+            scale,
+        }
+    }
+
+    /// The nearest instanced triangle along the ray before `t_max`: its instance, and where it
+    /// is in the instance's mesh BVH (its distance in world units).
+    fn nearest(&self, origin: Vec3, direction: Vec3, t_max: f32) -> Option<(usize, Nearest, f32)> {
+        let top = self.top.as_ref()?;
+        let ray =
+            Ray::new((origin * self.scale).into(), (direction + Vec3::ZERO).into(), 0.0, t_max * self.scale);
+        let mut hit = RayHit::none();
+        let mut best: Option<(usize, Nearest, f32)> = None;
+        top.ray_traverse(ray, &mut hit, |ray, slot| {
+            let instance = top.primitive_indices[slot] as usize;
+            let limit = ray.tmax / self.scale;
+            let (o, d) = self.local_ray(instance, origin, direction);
+            let mesh = &self.meshes[self.instances[instance].mesh as usize];
+            match mesh.nearest(o, d, limit, false) {
+                Some(n) => {
+                    let t = n.t / mesh.scale;
+                    best = Some((instance, n, t));
+                    t * self.scale
+                }
+                None => f32::INFINITY,
+            }
+        });
+        best.filter(|b| b.2 < t_max)
+    }
+
+    /// The ray in instance `instance`'s mesh space (the direction not normalised, so that
+    /// distances along it are the world's).
+    fn local_ray(&self, instance: usize, origin: Vec3, direction: Vec3) -> (Vec3, Vec3) {
+        let m = &self.to_local[instance];
+        (m.transform_point3(origin), m.transform_vector3(direction))
+    }
+
+    /// The hit at `nearest` in instance `instance`, in world coordinates; triangles are numbered
+    /// from `first_triangle`.
+    fn hit(
+        &self,
+        instance: usize,
+        nearest: Nearest,
+        origin: Vec3,
+        direction: Vec3,
+        first_triangle: u32,
+    ) -> Hit {
+        let placed = &self.instances[instance];
+        let (o, d) = self.local_ray(instance, origin, direction);
+        let local = self.meshes[placed.mesh as usize].hit(nearest, o, d);
+        let normal = Mat3::from_mat4(placed.to_world).inverse().transpose();
+        let p = placed.to_world.transform_point3(local.p);
+        // How far rounding can have moved the point: the local figure grown by the transform, and
+        // the point's own size.
+        let stretch =
+            Mat3::from_mat4(placed.to_world).to_cols_array().iter().fold(0.0f32, |m, v| m.max(v.abs()));
+        Hit {
+            triangle: first_triangle + placed.first + local.triangle,
+            p,
+            ng: (normal * local.ng).normalize_or_zero(),
+            scale: (3.0 * stretch * local.scale).max(p.abs().max_element()),
+            ..local
+        }
+    }
+
+    /// Whether an instanced triangle lies on the ray before `t_max`.
+    fn occluded(&self, origin: Vec3, direction: Vec3, t_max: f32) -> bool {
+        let Some(top) = self.top.as_ref() else { return false };
+        let ray =
+            Ray::new((origin * self.scale).into(), (direction + Vec3::ZERO).into(), 0.0, t_max * self.scale);
+        !top.ray_traverse_miss(ray, |_, slot| {
+            let instance = top.primitive_indices[slot] as usize;
+            let (o, d) = self.local_ray(instance, origin, direction);
+            match self.meshes[self.instances[instance].mesh as usize].occluded(o, d, t_max) {
+                true => 0.0,
+                false => f32::INFINITY,
+            }
+        })
+    }
+}
+
+/// The world box of `corners` moved by `to_world`.
+fn world_box(corners: &[[Vec3; 3]], to_world: Mat4) -> (Vec3, Vec3) {
+    let points = corners.iter().flatten().map(|&c| to_world.transform_point3(c)).filter(|p| p.is_finite());
+    points.fold((Vec3::INFINITY, Vec3::NEG_INFINITY), |(lo, hi), p| (lo.min(p), hi.max(p)))
+}
+
 /// The scene's BVHs: the fixed part (shared between poses) and the moving part.
 pub struct Accel {
     fixed: Arc<Bvh>,
     moving: Bvh,
     fixed_count: u32,
+    /// The instanced meshes (their triangles numbered after the fixed ones, before the moving
+    /// ones), if any.
+    instanced: Option<Arc<InstancedBvh>>,
+    /// How many triangles the instances draw.
+    instanced_count: u32,
     /// Every query asked, when recording (`caustic bench` replays them to time bare traversal).
     recorder: Option<Mutex<Vec<RecordedRay>>>,
 }
@@ -111,10 +256,16 @@ impl Accel {
         Accel::new(Arc::new(Bvh::build(corners, &vec![true; corners.len()], BuildFor::Range)), Bvh::empty())
     }
 
-    /// The fixed part's BVH with the moving part's (numbered after the fixed triangles).
+    /// The fixed part's BVH with the moving part's (numbered after the fixed and instanced triangles).
     pub fn new(fixed: Arc<Bvh>, moving: Bvh) -> Self {
         let fixed_count = fixed.triangles.len() as u32;
-        Accel { fixed, moving, fixed_count, recorder: None }
+        Accel { fixed, moving, fixed_count, instanced: None, instanced_count: 0, recorder: None }
+    }
+
+    /// This accelerator with `instanced` meshes too.
+    pub fn with_instances(self, instanced: Option<Arc<InstancedBvh>>) -> Self {
+        let instanced_count = instanced.as_ref().map_or(0, |i| i.triangles);
+        Accel { instanced, instanced_count, ..self }
     }
 
     /// This accelerator, recording every query from now on.
@@ -158,7 +309,14 @@ impl Accel {
     }
 
     fn closest(&self, origin: Vec3, direction: Vec3, t_max: f32, opaque_only: bool) -> Option<Hit> {
-        let (bvh, nearest, first_triangle) = self.nearest(origin, direction, t_max, opaque_only)?;
+        let found = self.nearest(origin, direction, t_max, opaque_only);
+        if let Some(instanced) = &self.instanced {
+            let limit = found.as_ref().map_or(t_max, |(bvh, n, _)| n.t / bvh.scale);
+            if let Some((instance, nearest, _)) = instanced.nearest(origin, direction, limit) {
+                return Some(instanced.hit(instance, nearest, origin, direction, self.fixed_count));
+            }
+        }
+        let (bvh, nearest, first_triangle) = found?;
         let hit = bvh.hit(nearest, origin, direction);
         Some(Hit { triangle: hit.triangle + first_triangle, ..hit })
     }
@@ -175,7 +333,7 @@ impl Accel {
         let fixed = self.fixed.nearest(origin, direction, t_max, opaque_only);
         let t_fixed = fixed.map_or(t_max, |n| n.t / self.fixed.scale);
         match self.moving.nearest(origin, direction, t_fixed, opaque_only) {
-            Some(moving) => Some((&self.moving, moving, self.fixed_count)),
+            Some(moving) => Some((&self.moving, moving, self.fixed_count + self.instanced_count)),
             None => fixed.map(|f| (&*self.fixed, f, 0)),
         }
     }
@@ -188,7 +346,9 @@ impl Accel {
     }
 
     fn blocked(&self, origin: Vec3, direction: Vec3, t_max: f32) -> bool {
-        self.fixed.occluded(origin, direction, t_max) || self.moving.occluded(origin, direction, t_max)
+        self.fixed.occluded(origin, direction, t_max)
+            || self.moving.occluded(origin, direction, t_max)
+            || self.instanced.as_ref().is_some_and(|i| i.occluded(origin, direction, t_max))
     }
 
     /// Whether a moving triangle that casts shadows lies on the ray before `t_max` (the fixed part

@@ -10,7 +10,7 @@ use std::path::{Path, PathBuf};
 use std::sync::Arc;
 use std::time::Instant;
 
-use crate::accel::{Accel, BuildFor, Bvh};
+use crate::accel::{Accel, BuildFor, Bvh, InstancedBvh};
 use crate::error::{summarize, ErrorSummary, PixelError};
 use crate::film::{Film, FilmMode, GUIDE_SUMS};
 use crate::monitor::{ErrorSettings, Monitor, StopReason};
@@ -307,6 +307,8 @@ fn fingerprint(
 pub struct Shot {
     prepared: Prepared,
     fixed_bvh: Arc<Bvh>,
+    /// The still instances' two-level BVH (built once), if any.
+    instanced_bvh: Option<Arc<InstancedBvh>>,
     still: Option<(Scene, Accel)>,
     shutter: Shutter,
     sppm: SppmSettings,
@@ -333,6 +335,7 @@ impl Shot {
         let lens = lens(lens_settings, description.camera.focal_length_mm);
         let prepared = Prepared::with_lens(Arc::new(description), range, lens);
         let fixed_bvh = Arc::new(prepared.fixed_bvh());
+        let instanced_bvh = prepared.instanced_bvh();
         let first = prepared.pose(range.start);
         let photons_per_pass = settings.photons.unwrap_or((full_width * full_height) as usize);
         let sppm = SppmSettings {
@@ -346,8 +349,9 @@ impl Shot {
             fixed_wavelength_nm: settings.wavelength_nm,
             light_sampling: settings.light_sampling,
         };
-        let still =
-            (!prepared.has_motion()).then(|| (first, Accel::new(Arc::clone(&fixed_bvh), Bvh::empty())));
+        let still_accel =
+            || Accel::new(Arc::clone(&fixed_bvh), Bvh::empty()).with_instances(instanced_bvh.clone());
+        let still = (!prepared.has_motion()).then(|| (first, still_accel()));
         let identity = match settings.partial_passes {
             Some(_) => Some((
                 partial::scene_sha256(&settings.scene)?,
@@ -355,7 +359,7 @@ impl Shot {
             )),
             None => None,
         };
-        Ok(Shot { prepared, fixed_bvh, still, shutter, sppm, identity })
+        Ok(Shot { prepared, fixed_bvh, instanced_bvh, still, shutter, sppm, identity })
     }
 
     /// The SPPM settings every pass uses.
@@ -376,14 +380,15 @@ impl Shot {
     /// The scene and its BVHs at `time`.
     pub fn pose(&self, time: f32) -> (Scene, Accel) {
         let scene = self.prepared.pose(time);
+        let moving = scene.moving.bvh(&scene.materials, BuildFor::Pose);
         let accel =
-            Accel::new(Arc::clone(&self.fixed_bvh), scene.moving.bvh(&scene.materials, BuildFor::Pose));
+            Accel::new(Arc::clone(&self.fixed_bvh), moving).with_instances(self.instanced_bvh.clone());
         (scene, accel)
     }
 
     /// The fixed part's BVH alone (what paths shared between frames are traced against).
     fn fixed_accel(&self) -> Accel {
-        Accel::new(Arc::clone(&self.fixed_bvh), Bvh::empty())
+        Accel::new(Arc::clone(&self.fixed_bvh), Bvh::empty()).with_instances(self.instanced_bvh.clone())
     }
 
     /// The pose `frame` renders pass `pass` in (its `own` when it has one for all its passes);

@@ -48,6 +48,7 @@ pub fn report(settings: &RenderSettings) -> Result<Value, String> {
     let shot = Shot::new(settings, description)?;
     let prepared = shot.prepared();
     let (fixed, moving) = prepared.triangle_counts();
+    let instanced = prepared.instanced_triangles();
     let shutter = shot.shutter();
     let reuse = settings.frames.len() > 1 && fixed > 0;
     let needs = json!({
@@ -96,7 +97,7 @@ pub fn report(settings: &RenderSettings) -> Result<Value, String> {
         "shutter_frames": shutter.length,
         "needs": needs,
         "reuse_shares": reuse_shares,
-        "triangles": {"static": fixed, "moving": moving},
+        "triangles": {"static": fixed, "moving": moving, "instanced": instanced.0, "instanced_stored": instanced.1},
         "deforming": deforming,
         "animated": animated,
         "skipped": skipped,

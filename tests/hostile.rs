@@ -419,22 +419,28 @@ fn hostile_texture_references_are_named() {
     }
 }
 
-/// Each broken animated value (`KHR_animation_pointer` or the `caustic.tracks` extras) is refused
-/// with a message naming its pointer.
-#[test]
-fn hostile_animated_values_are_refused() {
-    let dir = tempfile::tempdir().unwrap();
-    let base = animated_values();
-    let write = |name: &str, edit: &dyn Fn(&mut Value)| {
+/// A function writing `base` under a name into `dir` with an edit made; `base` itself renders
+/// (so that each refusal of an edited copy is its edit's).
+fn edited_copies(base: Value, dir: &Path) -> impl Fn(&str, &dyn Fn(&mut Value)) -> PathBuf + '_ {
+    let write = move |name: &str, edit: &dyn Fn(&mut Value)| {
         let mut doc = base.clone();
         edit(&mut doc);
-        let path = dir.path().join(name);
+        let path = dir.join(name);
         std::fs::write(&path, doc.to_string()).unwrap();
         path
     };
     let out = tempfile::tempdir().unwrap();
     let output = run_within_a_minute(render_command(&write("whole.gltf", &|_| {}), out.path()));
     assert!(output.status.success(), "{}", String::from_utf8_lossy(&output.stderr));
+    write
+}
+
+/// Each broken animated value (`KHR_animation_pointer` or the `caustic.tracks` extras) is refused
+/// with a message naming its pointer.
+#[test]
+fn hostile_animated_values_are_refused() {
+    let dir = tempfile::tempdir().unwrap();
+    let write = edited_copies(animated_values(), dir.path());
     let pointer = |d: &mut Value, p: &str| {
         d["animations"][0]["channels"][0]["target"]["extensions"]["KHR_animation_pointer"]["pointer"] =
             json!(p)
@@ -527,18 +533,7 @@ fn hostile_animated_values_are_refused() {
 #[test]
 fn hostile_skins_and_morph_targets_are_refused() {
     let dir = tempfile::tempdir().unwrap();
-    let base = deformed_square();
-    let write = |name: &str, edit: &dyn Fn(&mut Value)| {
-        let mut doc = base.clone();
-        edit(&mut doc);
-        let path = dir.path().join(name);
-        std::fs::write(&path, doc.to_string()).unwrap();
-        path
-    };
-    // The base renders (so each refusal below is its edit's).
-    let out = tempfile::tempdir().unwrap();
-    let output = run_within_a_minute(render_command(&write("whole.gltf", &|_| {}), out.path()));
-    assert!(output.status.success(), "{}", String::from_utf8_lossy(&output.stderr));
+    let write = edited_copies(deformed_square(), dir.path());
     let skin = |doc: &mut Value| doc["skins"][0].clone();
     let cases: [(&str, &dyn Fn(&mut Value), &[&str]); 8] = [
         (

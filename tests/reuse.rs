@@ -135,6 +135,30 @@ fn animated_values_render_each_frame_as_alone() {
     assert!(block > 1, "the still floor is shared: frames render together");
 }
 
+/// A ball moving over a still grid of instanced boxes (`EXT_mesh_gpu_instancing`, two levels):
+/// the boxes are shared like the floor, and nothing else may change.
+#[test]
+fn instanced_meshes_render_each_frame_as_alone() {
+    let dir = tempfile::tempdir().unwrap();
+    let mut gltf = GltfBuilder::default();
+    let white = gltf.material(diffuse([0.8, 0.8, 0.8]));
+    gltf.quad_y("Floor", 0.0, 3.0, true, white);
+    gltf.mesh("Box", &box_triangles([-0.1, 0.0, -0.1], [0.1, 0.3, 0.1]), white);
+    let boxes = gltf.last_node();
+    let places: Vec<[f32; 3]> =
+        (0..25).map(|k| [(k % 5) as f32 * 0.5 - 1.0, 0.0, (k / 5) as f32 * 0.5 - 1.0]).collect();
+    gltf.instance(boxes, &places, &vec![[0.0, 0.0, 0.0, 1.0]; 25], &vec![[1.0; 3]; 25]);
+    gltf.sphere("Ball", [0.0, 0.6, 0.0], 0.25, 8, white);
+    let ball = gltf.last_node();
+    gltf.animate(ball, "translation", &[0.0, 1.0], &[vec![-1.0, 0.0, 0.0], vec![1.0, 0.0, 0.0]], "LINEAR");
+    gltf.light(json!({"type": "point", "intensity": 4000.0}), [0.0, 2.0, 0.5], [0.0, -1.0, 0.0]);
+    gltf.camera([0.0, 3.0, 4.0], [0.0, -3.0, -4.0], 0.9);
+    gltf.scene_extras(json!({"fps": 24.0}));
+    let scene = gltf.write(dir.path(), "instanced");
+    let block = assert_reuse_renders_each_frame_alone(&scene, &[1, 12, 24], [48, 48]);
+    assert!(block > 1, "the floor and the boxes are shared: frames render together");
+}
+
 /// A skinned square whose morph target weight is animated, over a still lit floor: the square
 /// deforms and joins the moving part, the floor stays shared, and nothing else may change.
 #[test]

@@ -3,14 +3,14 @@
 //! scene-wide settings from the `caustic` extras. [`super::pose`] turns it into a render-ready
 //! [`super::Scene`] at a time.
 
-use glam::{Vec2, Vec3};
+use glam::{Mat3, Mat4, Vec2, Vec3};
 
 use super::animation::Rig;
-use super::TriangleRef;
+use super::{TriangleRef, VertexExtras};
 pub use crate::camera::Lens;
 use crate::camera::Projection;
 use crate::geometry::Cone;
-use crate::lights::{SphereLight, World};
+use crate::lights::{SphereLight, SpotFalloff, World};
 use crate::materials::Material;
 use crate::spectrum::Illuminant;
 
@@ -35,6 +35,35 @@ pub struct MeshInstance {
     pub deformation: Option<Box<super::deform::Deformation>>,
 }
 
+impl MeshInstance {
+    /// This mesh with its vertices moved by `m` (an instance's transform within its node): positions,
+    /// normals and tangents turned, the winding kept facing out where `m` mirrors.
+    pub fn transformed(&self, m: Mat4) -> MeshInstance {
+        let linear = Mat3::from_mat4(m);
+        let normal_matrix = linear.inverse().transpose();
+        let mut extras = VertexExtras::default();
+        extras.append(0, &self.extras, self.positions.len(), linear);
+        let mirrored = linear.determinant() < 0.0;
+        let triangles = self.triangles.iter().map(|t| {
+            let [a, b, c] = t.vertices;
+            super::TriangleRef {
+                vertices: if mirrored { [a, c, b] } else { [a, b, c] },
+                material: t.material,
+            }
+        });
+        MeshInstance {
+            node: self.node,
+            name: self.name.clone(),
+            positions: self.positions.iter().map(|&p| m.transform_point3(p)).collect(),
+            normals: self.normals.iter().map(|&n| (normal_matrix * n).normalize_or_zero()).collect(),
+            uvs: self.uvs.clone(),
+            extras,
+            triangles: triangles.collect(),
+            deformation: None,
+        }
+    }
+}
+
 /// A punctual light's kind and emission (see `crate::lights` for units).
 #[derive(Clone, Debug)]
 pub enum PunctualKind {
@@ -42,6 +71,26 @@ pub enum PunctualKind {
     Sphere(SphereLight),
     /// Irradiance, W/m^2, and the sun's disc.
     Sun(Illuminant, Cone),
+}
+
+impl PunctualKind {
+    /// This light with the animated `values`.
+    pub fn set(&mut self, values: &super::values::LightValues) {
+        match self {
+            PunctualKind::Sun(irradiance, _) => *irradiance = values.emitted,
+            PunctualKind::Sphere(sphere) => {
+                sphere.intensity = values.emitted;
+                if let Some(beam) = &mut sphere.beam {
+                    beam.outer = values.outer.unwrap_or(beam.outer);
+                    if let (Some(inner), SpotFalloff::Gltf { inner: cone }) =
+                        (values.inner, &mut beam.falloff)
+                    {
+                        *cone = inner;
+                    }
+                }
+            }
+        }
+    }
 }
 
 /// A `KHR_lights_punctual` light on a node (it shines down the node's local -z).
@@ -109,6 +158,8 @@ pub struct Description {
     pub rig: Rig,
     /// Meshes (and area lights, as emitting triangles) on their nodes.
     pub meshes: Vec<MeshInstance>,
+    /// Meshes drawn by the instances of still nodes, each kept once (`EXT_mesh_gpu_instancing`).
+    pub instanced: Vec<super::instancing::InstancedMesh>,
     /// Punctual lights on their nodes.
     pub lights: Vec<PunctualLight>,
     /// The camera.

@@ -16,9 +16,11 @@ use std::path::Path;
 use std::sync::Arc;
 
 use super::deform::{self, Deformation, Morph, MorphTarget, Skin, Skinning};
-use super::pointers::{self, Animations, Keys, NodeProperty};
+use super::instancing::{self, InstancedMesh};
+use super::pointers::{self, floats, Animations, Keys, NodeProperty};
+use super::pose::flatten;
 use super::values::{CameraAnimation, LightAnimation, MaterialAnimation};
-use super::{gltf_checks, gltf_unrendered, instancing};
+use super::{gltf_checks, gltf_unrendered, Geometry};
 
 use glam::{Mat4, Quat, Vec2, Vec3, Vec4};
 use gltf::animation::util::ReadOutputs;
@@ -62,6 +64,8 @@ struct Builder<'a> {
     animations: &'a Animations,
     /// The animated materials so far, by index.
     material_animations: Vec<(usize, MaterialAnimation)>,
+    /// The meshes of still nodes' instances, kept once.
+    instanced: Vec<InstancedMesh>,
 }
 
 /// Loads `path` into a [`Description`].
@@ -120,6 +124,7 @@ pub fn load(path: &Path) -> Result<Description, SceneError> {
         skins: Default::default(),
         animations: &animations,
         material_animations: gltf_material_animations(&document, &animations),
+        instanced: Vec::new(),
     };
     for node in gltf_scene.nodes() {
         builder.visit(&node, &rig).map_err(fail)?;
@@ -140,6 +145,7 @@ pub fn load(path: &Path) -> Result<Description, SceneError> {
     let mut description = Description {
         rig,
         meshes: builder.meshes,
+        instanced: builder.instanced,
         lights: builder.lights,
         camera,
         material_animations,
@@ -180,6 +186,54 @@ fn gltf_material_animations(
         .collect();
     list.sort_by_key(|(index, _)| *index);
     list
+}
+
+/// The transforms of `node`'s instances within the node, if it has the extension.
+fn instance_matrices(
+    node: &gltf::Node,
+    document: &gltf::Document,
+    buffers: &[gltf::buffer::Data],
+) -> Result<Option<Vec<Mat4>>, String> {
+    let Some(extension) = node.extension_value(instancing::EXTENSION) else {
+        return Ok(None);
+    };
+    let name = node.name().unwrap_or("unnamed");
+    let in_node = |e: String| format!("node '{name}' {}: {e}", instancing::EXTENSION);
+    let attribute = |key: &str, width: usize| -> Result<Option<Vec<f32>>, String> {
+        let Some(index) = extension.pointer(&format!("/attributes/{key}")) else { return Ok(None) };
+        let accessor = index
+            .as_u64()
+            .and_then(|i| document.accessors().nth(i as usize))
+            .ok_or_else(|| in_node(format!("{key} names accessor {index}, which the file does not have")))?;
+        if accessor.dimensions().multiplicity() != width {
+            return Err(in_node(format!("{key} must hold {width} floats an instance")));
+        }
+        floats(accessor, buffers).map(Some).map_err(in_node)
+    };
+    let translations = attribute("TRANSLATION", 3)?;
+    let rotations = attribute("ROTATION", 4)?;
+    let scales = attribute("SCALE", 3)?;
+    let counts: Vec<usize> = [(&translations, 3), (&rotations, 4), (&scales, 3)]
+        .iter()
+        .filter_map(|(values, width)| values.as_ref().map(|v| v.len() / width))
+        .collect();
+    let Some(&count) = counts.first() else {
+        return Err(in_node("it has no TRANSLATION, ROTATION or SCALE attribute".into()));
+    };
+    if counts.iter().any(|&c| c != count) {
+        return Err(in_node(format!("its attributes give different instance counts ({counts:?})")));
+    }
+    let all = [&translations, &rotations, &scales];
+    if all.iter().any(|values| values.as_ref().is_some_and(|v| !v.iter().all(|x| x.is_finite()))) {
+        return Err(in_node("its attributes hold values that are not finite numbers".into()));
+    }
+    let matrix = |k: usize| {
+        let t = translations.as_ref().map_or(Vec3::ZERO, |v| Vec3::from_slice(&v[3 * k..]));
+        let r = rotations.as_ref().map_or(Quat::IDENTITY, |v| Quat::from_slice(&v[4 * k..]).normalize());
+        let s = scales.as_ref().map_or(Vec3::ONE, |v| Vec3::from_slice(&v[3 * k..]));
+        Mat4::from_scale_rotation_translation(s, r, t)
+    };
+    Ok(Some((0..count).map(matrix).collect()))
 }
 
 /// `lines` without repeats (a mesh drawn by several nodes warns once), in their first order.
@@ -387,7 +441,7 @@ impl Builder<'_> {
             extras::parse(node.extras()).map_err(|e| format!("node '{name}' extras `caustic`: {e}"))?;
         if let Some(mesh) = node.mesh() {
             let first_instance = self.meshes.len();
-            self.add_mesh(&mesh, node)?;
+            self.add_mesh(&mesh, node, rig, extras.holdout)?;
             if extras.holdout {
                 self.hold_out(first_instance);
             }
@@ -627,16 +681,46 @@ impl Builder<'_> {
         });
     }
 
-    fn add_mesh(&mut self, mesh: &gltf::Mesh, node: &gltf::Node) -> Result<(), String> {
+    fn add_mesh(
+        &mut self,
+        mesh: &gltf::Mesh,
+        node: &gltf::Node,
+        rig: &Rig,
+        holdout: bool,
+    ) -> Result<(), String> {
         let name = mesh.name().unwrap_or("unnamed");
         let first = self.meshes.len();
         let skin = node.skin().map(|skin| self.skin(&skin, node.name().unwrap_or("unnamed"))).transpose()?;
         self.add_primitives(mesh, node, skin, name)?;
         self.thin_walls_of_open_glass(first, name);
-        if let Some(matrices) = instancing::matrices(node, self.document, self.buffers)? {
-            self.add_instances(first, &matrices, node.name().unwrap_or("unnamed"))?;
+        if let Some(matrices) = instance_matrices(node, self.document, self.buffers)? {
+            let name = node.name().unwrap_or("unnamed");
+            let moves = rig.moves_within(node.index(), f32::MIN, f32::MAX);
+            if !moves && !holdout && self.may_share(first) {
+                let mut geometry = Geometry::default();
+                for mesh in self.meshes.drain(first..) {
+                    flatten(&mesh, Mat4::IDENTITY, &mut geometry);
+                }
+                self.instanced.push(InstancedMesh { node: node.index(), geometry, matrices });
+            } else {
+                self.add_instances(first, &matrices, name)?;
+            }
         }
         Ok(())
+    }
+
+    /// Whether the mesh instances from `first` on can be drawn by a two-level BVH: they do not
+    /// deform, their materials neither emit nor change nor are light surfaces, and they close up
+    /// (open meshes keep their open edges, which only flattened triangles have).
+    fn may_share(&self, first: usize) -> bool {
+        let meshes = &self.meshes[first..];
+        let animated = |m: u32| self.animations.materials.contains_key(&(m as usize));
+        let plain = |m: u32| {
+            let material = &self.materials[m as usize];
+            material.emission.is_none() && !material.light_surface && !material.holdout && !animated(m)
+        };
+        meshes.iter().all(|m| m.deformation.is_none() && m.triangles.iter().all(|t| plain(t.material)))
+            && is_closed(meshes)
     }
 
     /// Replaces the mesh instances from `first` on with one copy per instance transform of
@@ -661,7 +745,7 @@ impl Builder<'_> {
         }
         let originals: Vec<MeshInstance> = self.meshes.drain(first..).collect();
         for &m in matrices {
-            self.meshes.extend(originals.iter().map(|mesh| instancing::transformed(mesh, m)));
+            self.meshes.extend(originals.iter().map(|mesh| mesh.transformed(m)));
         }
         Ok(())
     }

@@ -97,12 +97,25 @@ impl Geometry {
     /// The surface at `hit` on triangle `i`: the point, geometric normal and scale come with
     /// the hit; the shading normal, texture coordinates and material are looked up here.
     fn surface(&self, i: usize, hit: &Hit, lambda: &Wavelengths) -> Surface {
+        self.surface_with_normal(i, hit, lambda, |n| n)
+    }
+
+    /// The surface at `hit` on triangle `i`, its interpolated normal taken to the hit's space by
+    /// `to_hit` (an instance's normal matrix; the identity otherwise).
+    fn surface_with_normal(
+        &self,
+        i: usize,
+        hit: &Hit,
+        lambda: &Wavelengths,
+        to_hit: impl Fn(Vec3) -> Vec3,
+    ) -> Surface {
         let t = self.triangles[i];
         let [i0, i1, i2] = t.vertices.map(|v| v as usize);
         let b = hit.barycentric;
         let w = [1.0 - b.x - b.y, b.x, b.y];
         let normal = |i: usize| Vec3A::from(self.normals[i]);
         let n = Vec3::from((normal(i0) * w[0] + normal(i1) * w[1] + normal(i2) * w[2]).normalize_or_zero());
+        let n = to_hit(n).normalize_or_zero();
         let ng = hit.ng;
         let n = if n == Vec3::ZERO { ng } else { n };
         let uv = self.uvs[i0] * w[0] + self.uvs[i1] * w[1] + self.uvs[i2] * w[2];
@@ -124,13 +137,15 @@ impl Geometry {
     }
 }
 
-/// The scene at one time. Triangles are numbered fixed first, then moving.
+/// The scene at one time. Triangles are numbered fixed first, then instanced, then moving.
 #[derive(Clone, Debug)]
 pub struct Scene {
     /// Triangles that do not move over the prepared time range (shared between poses).
     pub fixed: Arc<Geometry>,
     /// Triangles that move, posed at this time.
     pub moving: Geometry,
+    /// Meshes drawn by still instances (their triangles numbered after the fixed ones).
+    pub instances: Arc<instancing::Instances>,
     /// Materials, indexed by `TriangleRef::material`.
     pub materials: Arc<Vec<Material>>,
     /// Every light, emitting triangles included.
@@ -195,28 +210,41 @@ impl Scene {
     /// The surface where a ray hit, with what its material reads there at the wavelengths
     /// `lambda`.
     pub fn surface(&self, hit: &Hit, lambda: &Wavelengths) -> Surface {
-        let fixed = self.fixed.triangles.len();
-        match (hit.triangle as usize).checked_sub(fixed) {
-            None => self.fixed.surface(hit.triangle as usize, hit, lambda),
-            Some(moving) => self.moving.surface(moving, hit, lambda),
+        match self.part(hit.triangle) {
+            Part::Fixed(t) => self.fixed.surface(t, hit, lambda),
+            Part::Moving(t) => self.moving.surface(t, hit, lambda),
+            Part::Instanced(t) => self.instances.surface(t, hit, lambda),
+        }
+    }
+
+    /// Which part of the scene `triangle` is in, and its number there: triangles are numbered
+    /// fixed first, then instanced (both the same in every pose), then moving.
+    #[inline]
+    fn part(&self, triangle: u32) -> Part {
+        let (fixed, instanced) = (self.fixed.triangles.len(), self.instances.triangle_count());
+        match triangle as usize {
+            t if t < fixed => Part::Fixed(t),
+            t if t < fixed + instanced => Part::Instanced(t - fixed),
+            t => Part::Moving(t - fixed - instanced),
         }
     }
 
     /// The index in `materials` of `triangle`'s material.
     pub fn triangle_material(&self, triangle: u32) -> u32 {
-        let fixed = self.fixed.triangles.len();
-        match (triangle as usize).checked_sub(fixed) {
-            None => self.fixed.triangles[triangle as usize].material,
-            Some(moving) => self.moving.triangles[moving].material,
+        match self.part(triangle) {
+            Part::Fixed(t) => self.fixed.triangles[t].material,
+            Part::Moving(t) => self.moving.triangles[t].material,
+            Part::Instanced(t) => self.instances.material(t),
         }
     }
 
-    /// The index in `lights` of `triangle`'s emitter, or [`NOT_A_LIGHT`].
+    /// The index in `lights` of `triangle`'s emitter, or [`NOT_A_LIGHT`] (instanced meshes
+    /// never emit).
     pub fn triangle_light(&self, triangle: u32) -> u32 {
-        let fixed = self.fixed.triangles.len();
-        match (triangle as usize).checked_sub(fixed) {
-            None => self.fixed_triangle_lights[triangle as usize],
-            Some(moving) => self.moving_triangle_lights[moving],
+        match self.part(triangle) {
+            Part::Fixed(t) => self.fixed_triangle_lights[t],
+            Part::Moving(t) => self.moving_triangle_lights[t],
+            Part::Instanced(_) => NOT_A_LIGHT,
         }
     }
 
@@ -241,8 +269,17 @@ impl Scene {
 
     /// The sphere around every triangle (radius 1 at the origin for an empty scene).
     pub fn bounding_sphere(&self) -> BoundingSphere {
-        bounding_sphere([self.fixed.bounds(), self.moving.bounds()].into_iter().flatten())
+        bounding_sphere(
+            [self.fixed.bounds(), self.moving.bounds(), self.instances.bounds()].into_iter().flatten(),
+        )
     }
+}
+
+/// The part of the scene a triangle is in, with its number there.
+enum Part {
+    Fixed(usize),
+    Moving(usize),
+    Instanced(usize),
 }
 
 /// The sphere around a set of boxes (radius 1 at the origin when there are none).

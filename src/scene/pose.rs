@@ -14,10 +14,11 @@ use glam::{Mat3, Mat4, Vec3};
 use super::animation::Rig;
 use super::deform::{Deformation, Vertices};
 use super::description::{Description, Lens, LensSettings, MeshInstance, PunctualKind, PunctualLight};
+use super::instancing::Instances;
 use super::{
     bounding_sphere, Geometry, OpenEdges, OpenSides, Scene, TriangleRef, DEFAULT_RADIUS_FRACTION, NOT_A_LIGHT,
 };
-use crate::accel::{BuildFor, Bvh};
+use crate::accel::{BuildFor, Bvh, InstancedBvh};
 use crate::camera::Camera;
 use crate::lights::{
     Beam, BoundingSphere, CutEmission, Emission, EmittingTriangle, Light, LightTree, SphereLight,
@@ -50,6 +51,8 @@ pub struct Prepared {
     /// The range it is ready for.
     pub range: TimeRange,
     fixed: Arc<Geometry>,
+    /// The still nodes' instances, each mesh kept once.
+    instances: Arc<Instances>,
     fixed_lights: Vec<Light>,
     /// The powers by which photons choose the fixed lights: an animated light's at its peak, so
     /// that the choice is the same whatever range a render covers (reuse across frames).
@@ -72,7 +75,7 @@ pub struct Prepared {
 }
 
 /// Flattens `mesh` with the world matrix `world` into `out`.
-fn flatten(mesh: &MeshInstance, world: Mat4, out: &mut Geometry) {
+pub(super) fn flatten(mesh: &MeshInstance, world: Mat4, out: &mut Geometry) {
     let normal_matrix = Mat3::from_mat4(world).inverse().transpose();
     let mirrored = Mat3::from_mat4(world).determinant() < 0.0;
     let base = out.positions.len() as u32;
@@ -160,7 +163,7 @@ fn punctual(light: &PunctualLight, rig: &Rig, time: f32) -> Light {
     let axis = world.transform_vector3(-Vec3::Z).normalize();
     let mut kind = Cow::Borrowed(&light.kind);
     if let Some(animation) = &light.animation {
-        animation.apply(kind.to_mut(), time);
+        kind.to_mut().set(&animation.at(time));
     }
     match kind.as_ref() {
         PunctualKind::Sphere(sphere) => Light::Sphere(SphereLight {
@@ -205,7 +208,7 @@ fn peak_power(light: &PunctualLight, rig: &Rig, time: f32) -> f64 {
         None => punctual(light, rig, time).power(),
         Some(animation) => {
             let mut kind = light.kind.clone();
-            animation.peak(&mut kind);
+            kind.set(&animation.peak());
             punctual(&PunctualLight { kind, animation: None, node: light.node }, rig, time).power()
         }
     }
@@ -294,7 +297,8 @@ impl Prepared {
         // path from the sun is the same in every frame (reuse across frames).
         let swept =
             moving_meshes.iter().filter_map(|&m| swept_bounds(&description, &description.meshes[m], range));
-        let sphere = bounding_sphere(fixed.bounds().into_iter().chain(swept));
+        let instances = Instances::new(&description.instanced, |node| rig.world(node, range.start));
+        let sphere = bounding_sphere(fixed.bounds().into_iter().chain(instances.bounds()).chain(swept));
         let open_edges = Arc::new(OpenEdges::of(&fixed, sphere.radius * DEFAULT_RADIUS_FRACTION as f32));
         let moving_open_sides = OpenSides::of(&flatten_at(&description, &moving_meshes, range.start));
         let camera = &description.camera;
@@ -306,6 +310,7 @@ impl Prepared {
             description,
             range,
             fixed: Arc::new(fixed),
+            instances: Arc::new(instances),
             fixed_lights,
             fixed_choice_powers,
             peak_materials,
@@ -350,6 +355,16 @@ impl Prepared {
     pub fn triangle_counts(&self) -> (usize, usize) {
         let moving = self.moving_meshes.iter().map(|&m| self.description.meshes[m].triangles.len()).sum();
         (self.fixed.triangles.len(), moving)
+    }
+
+    /// Triangles the instances draw, and those they store.
+    pub fn instanced_triangles(&self) -> (usize, usize) {
+        (self.instances.triangle_count(), self.instances.stored_triangles())
+    }
+
+    /// The instances' two-level BVH (built once), if there are instances.
+    pub fn instanced_bvh(&self) -> Option<Arc<InstancedBvh>> {
+        self.instances.bvh()
     }
 
     /// The fixed part's BVH (built once).
@@ -451,6 +466,7 @@ impl Prepared {
         let light_choice = Arc::new(Distribution1D::new(self.choice_powers(powers, &moving, time)));
         Scene {
             fixed: Arc::clone(&self.fixed),
+            instances: Arc::clone(&self.instances),
             moving,
             materials,
             lights,

@@ -7,10 +7,8 @@
 use glam::{Vec3, Vec4};
 
 use super::animation::Track;
-use super::description::PunctualKind;
 use crate::camera::Projection;
 use crate::geometry::Cone;
-use crate::lights::SpotFalloff;
 use crate::materials::{BaseColour, Material};
 use crate::spectrum::{Illuminant, RgbSpectrum};
 
@@ -83,40 +81,42 @@ pub struct LightAnimation {
     pub tracks: Tracks<LightProperty>,
 }
 
+/// A punctual light's values at one time (or at its peak).
+#[derive(Clone, Copy, Debug)]
+pub struct LightValues {
+    /// What it emits (W/sr, or W/m^2 for a sun).
+    pub emitted: Illuminant,
+    /// A spot's outer cone, if animated.
+    pub outer: Option<Cone>,
+    /// A spot's inner cone (glTF's falloff), if animated.
+    pub inner: Option<Cone>,
+}
+
 impl LightAnimation {
-    /// `kind` with the animated values at `time`.
-    pub fn apply(&self, kind: &mut PunctualKind, time: f32) {
-        self.set(kind, |p| self.tracks.at(p, time));
+    /// The light's values at `time`.
+    pub fn at(&self, time: f32) -> LightValues {
+        self.values(|p| self.tracks.at(p, time))
     }
 
-    /// `kind` with every animated value at its largest key (each colour component at its own):
-    /// a light at least as strong as at any time, whose power chooses it for photons the same
-    /// way whatever frames a render covers.
-    pub fn peak(&self, kind: &mut PunctualKind) {
-        self.set(kind, |p| self.tracks.peak(p));
+    /// The light's values with every animated one at its largest key (each colour component at
+    /// its own): a light at least as strong as at any time, whose power chooses it for photons
+    /// the same way whatever frames a render covers.
+    pub fn peak(&self) -> LightValues {
+        self.values(|p| self.tracks.peak(p))
     }
 
-    /// `kind` with the values `value` gives (the values at rest where it gives none).
-    fn set(&self, kind: &mut PunctualKind, value: impl Fn(LightProperty) -> Option<Vec4>) {
+    /// The values `value` gives (the values at rest where it gives none).
+    fn values(&self, value: impl Fn(LightProperty) -> Option<Vec4>) -> LightValues {
         let colour = value(LightProperty::Colour).map_or(self.colour, Vec4::truncate);
         let intensity = value(LightProperty::Intensity).map_or(self.intensity, |v| v.x);
-        let emitted =
-            Illuminant::new(colour.max(Vec3::ZERO) * intensity.max(0.0) * self.per_unit, self.kelvin);
-        match kind {
-            PunctualKind::Sun(irradiance, _) => *irradiance = emitted,
-            PunctualKind::Sphere(sphere) => {
-                sphere.intensity = emitted;
-                if let Some(beam) = &mut sphere.beam {
-                    if let Some(outer) = value(LightProperty::OuterCone) {
-                        beam.outer = Cone::from_half_angle(outer.x);
-                    }
-                    if let (Some(inner), SpotFalloff::Gltf { inner: cone }) =
-                        (value(LightProperty::InnerCone), &mut beam.falloff)
-                    {
-                        *cone = Cone::from_half_angle(inner.x);
-                    }
-                }
-            }
+        let cone = |p| value(p).map(|v: Vec4| Cone::from_half_angle(v.x));
+        LightValues {
+            emitted: Illuminant::new(
+                colour.max(Vec3::ZERO) * intensity.max(0.0) * self.per_unit,
+                self.kelvin,
+            ),
+            outer: cone(LightProperty::OuterCone),
+            inner: cone(LightProperty::InnerCone),
         }
     }
 }

@@ -36,14 +36,20 @@ TOLERANCE = 0.05
 LUMINANCE = np.array([0.2126, 0.7152, 0.0722])
 
 
-def render_caustic(name):
+def use_caustic(name, filepath):
+    """Caustic as the engine at the scene's pass count, writing 32-bit EXRs to `filepath`."""
     scene = bpy.context.scene
     scene.render.engine = 'CAUSTIC'
     scene.caustic.passes = parity_scenes.PASSES.get(name, PASSES)
     scene.render.image_settings.media_type = 'IMAGE'
     scene.render.image_settings.file_format = 'OPEN_EXR'
     scene.render.image_settings.color_depth = '32'
-    scene.render.filepath = str(OUT / f"{name}.exr")
+    scene.render.filepath = str(filepath)
+    return scene
+
+
+def render_caustic(name):
+    scene = use_caustic(name, OUT / f"{name}.exr")
     bpy.ops.render.render(write_still=True)
     rgba = OpenEXR.File(scene.render.filepath).channels()["RGBA"].pixels.astype(np.float64)
     return rgba[..., :3], rgba[..., 3]
@@ -51,13 +57,7 @@ def render_caustic(name):
 
 def render_animation(name):
     """Renders the scene's frame range through Render Animation; gives each frame's RGB."""
-    scene = bpy.context.scene
-    scene.render.engine = 'CAUSTIC'
-    scene.caustic.passes = parity_scenes.PASSES.get(name, PASSES)
-    scene.render.image_settings.media_type = 'IMAGE'
-    scene.render.image_settings.file_format = 'OPEN_EXR'
-    scene.render.image_settings.color_depth = '32'
-    scene.render.filepath = str(OUT / f"{name}_####")
+    use_caustic(name, OUT / f"{name}_####")
     bpy.ops.render.render(animation=True)
     read = lambda frame: OpenEXR.File(str(OUT / f"{name}_{frame:04d}.exr")).channels()["RGBA"].pixels
     return {frame: read(frame)[..., :3].astype(np.float64) for frame in parity_scenes.FRAMES[name]}

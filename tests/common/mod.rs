@@ -531,8 +531,8 @@ impl GltfBuilder {
     }
 }
 
-/// A floor lit by a point light and an area light, three instances of a glowing square
-/// (`EXT_mesh_gpu_instancing`) and a camera, with their values animated: the light's intensity and colour, the square's emission strength and the
+/// A floor lit by a point light and an area light, three instances of a glowing square and two of
+/// a grey box (`EXT_mesh_gpu_instancing`) and a camera, with their values animated: the light's intensity and colour, the square's emission strength and the
 /// camera's field of view by `KHR_animation_pointer`, the area light's power by the
 /// `caustic.tracks` extras. The hostile-input suite breaks it and the fuzzer mutates it.
 pub fn animated_values() -> Value {
@@ -553,6 +553,15 @@ pub fn animated_values() -> Value {
     gltf.extras_node("Area", area, [-0.8, 1.5, 0.0], [0.0, -1.0, 0.0]);
     let area = gltf.last_node();
     gltf.camera([0.0, 4.0, 0.01], [0.0, -1.0, 0.0], 0.9);
+    // Still grey boxes, drawn through the two-level BVH (the glowing squares are expanded).
+    gltf.mesh("Box", &box_triangles([-0.1, 0.0, -0.1], [0.1, 0.2, 0.1]), grey);
+    let boxes = gltf.last_node();
+    gltf.instance(
+        boxes,
+        &[[1.2, 0.0, 1.2], [-1.2, 0.0, -1.2]],
+        &[identity, turn],
+        &[[1.0; 3], [1.5, 1.0, 0.7]],
+    );
     let times = [0.0, 1.0];
     let pair = |a: f32, b: f32| [vec![a], vec![b]];
     gltf.animate_pointer(
