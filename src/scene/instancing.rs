@@ -94,7 +94,8 @@ impl Instances {
         let linear = Mat3::from_mat4(placed.to_world);
         let normal_matrix = linear.inverse().transpose();
         let mesh = &self.meshes[placed.mesh as usize];
-        let mut surface = mesh.surface_with_normal(local, hit, lambda, |n| normal_matrix * n);
+        let mut surface =
+            mesh.surface_with_normal(local, hit, lambda, |n| (normal_matrix * n).normalize_or_zero());
         let tangent = surface.inputs.tangent;
         if tangent != Vec4::ZERO {
             let turned = (linear * tangent.truncate()).normalize_or_zero();

@@ -100,8 +100,9 @@ impl Geometry {
         self.surface_with_normal(i, hit, lambda, |n| n)
     }
 
-    /// The surface at `hit` on triangle `i`, its interpolated normal taken to the hit's space by
-    /// `to_hit` (an instance's normal matrix; the identity otherwise).
+    /// The surface at `hit` on triangle `i`, its interpolated unit normal taken to the hit's space
+    /// by `to_hit` (an instance's normal matrix, normalised; the identity otherwise).
+    #[inline]
     fn surface_with_normal(
         &self,
         i: usize,
@@ -115,7 +116,7 @@ impl Geometry {
         let w = [1.0 - b.x - b.y, b.x, b.y];
         let normal = |i: usize| Vec3A::from(self.normals[i]);
         let n = Vec3::from((normal(i0) * w[0] + normal(i1) * w[1] + normal(i2) * w[2]).normalize_or_zero());
-        let n = to_hit(n).normalize_or_zero();
+        let n = to_hit(n);
         let ng = hit.ng;
         let n = if n == Vec3::ZERO { ng } else { n };
         let uv = self.uvs[i0] * w[0] + self.uvs[i1] * w[1] + self.uvs[i2] * w[2];
