@@ -201,3 +201,42 @@ fn info_lists_the_animated_values() {
         (Some(true), Some(true))
     );
 }
+
+/// A sun's caustic under a glass ball, next to a point light whose intensity is animated: photons
+/// choose the animated light by its peak power and the sun by its own, so the sun's caustic (which
+/// only photons carry) is as bright as in the same scene with nothing animated, within 5%.
+#[test]
+fn a_sun_keeps_its_photons_beside_an_animated_light() {
+    let dir = tempfile::tempdir().unwrap();
+    let scene = |animated: bool| {
+        let mut gltf = GltfBuilder::default();
+        let white = gltf.material(diffuse([0.8, 0.8, 0.8]));
+        gltf.quad_y("Floor", 0.0, 3.0, true, white);
+        let glass = gltf.material(json!({"pbrMetallicRoughness": {"baseColorFactor": [1.0, 1.0, 1.0, 1.0], "metallicFactor": 0.0, "roughnessFactor": 0.0},
+            "extensions": {"KHR_materials_transmission": {"transmissionFactor": 1.0}}}));
+        gltf.sphere("Ball", [0.0, 0.6, 0.0], 0.4, 24, glass);
+        gltf.light(json!({"type": "directional", "intensity": 2000.0}), [0.0, 5.0, 0.0], [0.0, -1.0, 0.0]);
+        gltf.light(json!({"type": "point", "intensity": 50.0}), [2.5, 1.0, 0.0], [0.0, -1.0, 0.0]);
+        if animated {
+            let keys = [vec![50.0], vec![400.0]];
+            gltf.animate_pointer(
+                "/extensions/KHR_lights_punctual/lights/1/intensity",
+                &[0.0, 1.0],
+                &keys,
+                "LINEAR",
+            );
+        }
+        gltf.camera([0.0, 3.0, 0.01], [0.0, -1.0, -0.0025], 0.5);
+        gltf.scene_extras(json!({"resolution": [64, 64]}));
+        gltf.write(dir.path(), if animated { "animated" } else { "still" })
+    };
+    let caustic = |path: &Path, out: &str| {
+        let mut s = settings(path, &dir.path().join(out), 64);
+        s.photons = Some(20_000);
+        s.frames = vec![0];
+        render(&s, 2).luminance(28, 36, 28, 36)
+    };
+    let (animated, still) = (caustic(&scene(true), "a"), caustic(&scene(false), "b"));
+    eprintln!("the sun's caustic: {animated:.3} with an animated light beside it, {still:.3} without");
+    assert!((animated / still - 1.0).abs() < 0.05, "{animated} against {still}");
+}

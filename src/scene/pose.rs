@@ -202,16 +202,18 @@ fn peak_materials(description: &Description) -> Option<Vec<Material>> {
     materials
 }
 
-/// The power of `light` at its peak (at `time`, where only its pose matters).
-fn peak_power(light: &PunctualLight, rig: &Rig, time: f32) -> f64 {
-    match &light.animation {
-        None => punctual(light, rig, time).power(),
-        Some(animation) => {
-            let mut kind = light.kind.clone();
-            kind.set(&animation.peak());
-            punctual(&PunctualLight { kind, animation: None, node: light.node }, rig, time).power()
-        }
+/// The power of `light` at its peak (at `time`, where only its pose matters; a sun's photons
+/// start on `sphere`).
+fn peak_power(light: &PunctualLight, rig: &Rig, time: f32, sphere: BoundingSphere) -> f64 {
+    let mut kind = light.kind.clone();
+    if let Some(animation) = &light.animation {
+        kind.set(&animation.peak());
     }
+    let mut posed = punctual(&PunctualLight { kind, animation: None, node: light.node }, rig, time);
+    if let Light::Sun { sphere: s, .. } = &mut posed {
+        *s = sphere;
+    }
+    posed.power()
 }
 
 /// Times at which moving meshes are posed to bound their sweep over a range.
@@ -284,21 +286,21 @@ impl Prepared {
         let fixed = flatten_at(&description, &fixed_meshes, range.start);
         let mut fixed_lights: Vec<Light> =
             fixed_punctual.iter().map(|&l| punctual(&description.lights[l], rig, range.start)).collect();
-        let peak_materials = peak_materials(&description);
-        let fixed_punctual_peaks =
-            fixed_punctual.iter().map(|&l| peak_power(&description.lights[l], rig, range.start));
-        let fixed_emitter_peaks = peak_materials.as_ref().map(|peak| triangle_lights(&fixed, peak, 0).0);
-        let (emitters, fixed_triangle_lights) = triangle_lights(&fixed, &materials, fixed_lights.len());
-        let fixed_emitter_peaks = fixed_emitter_peaks.unwrap_or_else(|| emitters.clone());
-        let fixed_choice_powers =
-            fixed_punctual_peaks.chain(fixed_emitter_peaks.iter().map(Light::power)).collect();
-        fixed_lights.extend(emitters);
         // Distant lights aim their photons at one sphere for the whole range, so that a photon
         // path from the sun is the same in every frame (reuse across frames).
         let swept =
             moving_meshes.iter().filter_map(|&m| swept_bounds(&description, &description.meshes[m], range));
         let instances = Instances::new(&description.instanced, |node| rig.world(node, range.start));
         let sphere = bounding_sphere(fixed.bounds().into_iter().chain(instances.bounds()).chain(swept));
+        let peak_materials = peak_materials(&description);
+        let fixed_punctual_peaks =
+            fixed_punctual.iter().map(|&l| peak_power(&description.lights[l], rig, range.start, sphere));
+        let fixed_emitter_peaks = peak_materials.as_ref().map(|peak| triangle_lights(&fixed, peak, 0).0);
+        let (emitters, fixed_triangle_lights) = triangle_lights(&fixed, &materials, fixed_lights.len());
+        let fixed_emitter_peaks = fixed_emitter_peaks.unwrap_or_else(|| emitters.clone());
+        let fixed_choice_powers =
+            fixed_punctual_peaks.chain(fixed_emitter_peaks.iter().map(Light::power)).collect();
+        fixed_lights.extend(emitters);
         let open_edges = Arc::new(OpenEdges::of(&fixed, sphere.radius * DEFAULT_RADIUS_FRACTION as f32));
         let moving_open_sides = OpenSides::of(&flatten_at(&description, &moving_meshes, range.start));
         let camera = &description.camera;
@@ -386,7 +388,8 @@ impl Prepared {
         }
         let fixed = self.fixed_lights.len();
         powers[..fixed].copy_from_slice(&self.fixed_choice_powers);
-        let moving_punctual = self.moving_lights.iter().map(|&l| peak_power(&d.lights[l], &d.rig, time));
+        let peak = |l: usize| peak_power(&d.lights[l], &d.rig, time, self.sphere);
+        let moving_punctual = self.moving_lights.iter().map(|&l| peak(l));
         let emitters = match &self.peak_materials {
             Some(peak) => triangle_lights(moving, peak, 0).0.iter().map(Light::power).collect(),
             None => powers[fixed + self.moving_lights.len()..].to_vec(),
