@@ -41,6 +41,16 @@ pub fn run_frames(scene: &Path, frames: Vec<i32>, passes: u64) -> Result<(), Str
             report.block_frames
         );
         let per_frame = |n: u64| n as f64 / count;
+        let t = report.time_split;
+        println!(
+            "  time per frame: posing {:.3} s, shared work {:.3} s, the frame's own paths and gathers {:.3} s, accumulation {:.3} s, error estimates {:.3} s, output {:.3} s",
+            t.posing / count,
+            t.shared / count,
+            t.frames / count,
+            t.accumulation / count,
+            t.monitoring / count,
+            t.output / count
+        );
         println!(
             "  per frame: {:.0} rays (eye {:.0}, shadow {:.0}, photon {:.0}), {:.0} tests against moving triangles",
             per_frame(rays(all)),

@@ -8,7 +8,7 @@
 use std::ops::Range;
 use std::path::{Path, PathBuf};
 use std::sync::Arc;
-use std::time::Instant;
+use std::time::{Duration, Instant};
 
 use crate::accel::{Accel, BuildFor, Bvh, InstancedBvh};
 use crate::error::{summarize, ErrorSummary, PixelError};
@@ -166,6 +166,26 @@ pub struct RenderReport {
     pub block_frames: usize,
     /// Work done once per pass for a whole block (paths shared between its frames).
     pub shared_stats: PassStats,
+    /// Where the time went, summed over every frame and pass.
+    pub time_split: TimeSplit,
+}
+
+/// Where a render's time went, in seconds summed over its frames and passes.
+#[derive(Clone, Copy, Debug, Default)]
+pub struct TimeSplit {
+    /// Posing the scene at pass times (and building the moving BVH).
+    pub posing: f64,
+    /// Work shared by the frames of a block: photon paths against the static triangles, their
+    /// checks, the common photons' grid, shared eye paths.
+    pub shared: f64,
+    /// Each frame's own work: its eye paths and gathers (all of a pass without reuse).
+    pub frames: f64,
+    /// Adding each pass's estimates to its frame's film.
+    pub accumulation: f64,
+    /// Each frame's error estimate after a pass, and the progress line.
+    pub monitoring: f64,
+    /// Writing each frame's EXR.
+    pub output: f64,
 }
 
 /// Image size: the flag, else the scene's extras, else 640 wide at the camera's aspect ratio.
@@ -539,15 +559,23 @@ fn render_block(
             .zip(&own_poses)
             .map(|(f, own)| shot.posed(f.frame, own, pass, &mut report.poses))
             .collect();
+        let posed = Instant::now();
+        report.time_split.posing += (posed - start).as_secs_f64();
+        let (mut accumulation, mut shared) = (Duration::ZERO, Duration::ZERO);
         if share {
-            report.shared_stats = report.shared_stats + shared_pass(shot, &poses, &samples, &mut active);
+            let stats;
+            (stats, shared) = shared_pass(shot, &poses, &samples, &mut active, &mut accumulation);
+            report.shared_stats = report.shared_stats + stats;
         } else {
             for (frame, posed) in active.iter_mut().zip(&poses) {
                 let (scene, accel) = posed.parts();
                 let (_, estimates, stats) = Renderer::new(scene, accel, s.clone()).run_pass(pass);
+                let adding = Instant::now();
                 add_pass(frame, &samples, &estimates, stats);
+                accumulation += adding.elapsed();
             }
         }
+
         if settings.denoising_passes {
             for (frame, posed) in active.iter_mut().zip(&poses) {
                 let (scene, accel) = posed.parts();
@@ -556,6 +584,11 @@ fn render_block(
             }
         }
         drop(poses);
+        let passes_done = Instant::now();
+        let split = &mut report.time_split;
+        split.shared += shared.as_secs_f64();
+        split.accumulation += accumulation.as_secs_f64();
+        split.frames += (passes_done - posed).saturating_sub(shared + accumulation).as_secs_f64();
         let elapsed_share = start.elapsed().as_secs_f64() / active.len() as f64;
         done += 1;
         for frame in &mut active {
@@ -568,6 +601,7 @@ fn render_block(
         }
         let rendered: Vec<i32> = active.iter().map(|f| f.frame).collect();
         progress.update(&rendered, done, active[0].elapsed_s, active[0].monitor.status());
+        report.time_split.monitoring += passes_done.elapsed().as_secs_f64();
         if stop_requested() {
             let written = report.frames.len();
             let unfinished: Vec<String> = active.iter().map(|f| f.frame.to_string()).collect();
@@ -579,7 +613,11 @@ fn render_block(
         let (mut still_running, mut their_poses) = (Vec::new(), Vec::new());
         for ((frame, own), met) in active.into_iter().zip(own_poses).zip(target_met) {
             match stop_reason(settings, &frame, met, limit) {
-                Some(stopped_by) => finish_frame(shot, settings, frame, photons, stopped_by, report)?,
+                Some(stopped_by) => {
+                    let writing = Instant::now();
+                    finish_frame(shot, settings, frame, photons, stopped_by, report)?;
+                    report.time_split.output += writing.elapsed().as_secs_f64();
+                }
                 None => {
                     still_running.push(frame);
                     their_poses.push(own);
@@ -593,13 +631,15 @@ fn render_block(
 }
 
 /// Runs pass `samples.index` for every active frame at once, sharing paths between them; gives
-/// the work done once.
+/// the work done once and its time, and adds the time spent adding estimates to films to
+/// `accumulation`.
 fn shared_pass(
     shot: &Shot,
     poses: &[Posed],
     samples: &PassSamples,
     active: &mut [FrameInProgress],
-) -> PassStats {
+    accumulation: &mut Duration,
+) -> (PassStats, Duration) {
     let s = &shot.sppm;
     let (first_scene, _) = poses[0].parts();
     let fixed_accel = shot.fixed_accel();
@@ -613,7 +653,9 @@ fn shared_pass(
         .collect();
     let share_eyes = !shot.prepared.camera_moves() && !shot.prepared.lights_move();
     run_shared_pass(&statics, &renderers, samples, share_eyes, |out| {
+        let adding = Instant::now();
         add_pass(&mut active[out.frame], samples, &out.estimates, out.stats);
+        *accumulation += adding.elapsed();
     })
 }
 

@@ -111,14 +111,16 @@ pub struct SharedPassOutput {
 /// Renders `pass` for every frame of `frames` (each posed at its own time for this pass, all
 /// choosing lights as `statics` does), sharing what they can through `statics`: the same scene
 /// with the static triangles alone. `share_eyes` when neither the camera nor a light moves.
-/// Hands each frame's estimates to `consume` in frame order; returns the work done once.
+/// Hands each frame's estimates to `consume` in frame order; returns the work done once and the
+/// time it took (before any frame's own work).
 pub fn run_shared_pass(
     statics: &Renderer,
     frames: &[Renderer],
     pass: &PassSamples,
     share_eyes: bool,
     mut consume: impl FnMut(SharedPassOutput),
-) -> PassStats {
+) -> (PassStats, std::time::Duration) {
+    let start = std::time::Instant::now();
     let swept = Swept::of(frames);
     let (shared, mut stats) = trace_shared_photons(statics, pass, swept);
     let checked: Vec<(FramePhotons, PassStats)> =
@@ -138,6 +140,7 @@ pub fn run_shared_pass(
         }
         None => Vec::new(),
     };
+    let shared_time = start.elapsed();
     for (index, (frame, (photons, photon_stats))) in frames.iter().zip(&checked).enumerate() {
         let own = own_photons(&shared, &always_valid, photons);
         let own_set = PhotonSet::new(&own, pass.radius, &frame.scene.open_edges);
@@ -165,7 +168,7 @@ pub fn run_shared_pass(
         let frame_stats = *photon_stats + eye_stats;
         consume(SharedPassOutput { frame: index, estimates, stats: frame_stats });
     }
-    stats
+    (stats, shared_time)
 }
 
 /// Traces every photon path of `pass` against the static triangles, keeping the segments that
