@@ -89,8 +89,18 @@ pub struct Placement {
     pub mesh: u32,
     /// The mesh's space to the world.
     pub to_world: Mat4,
+    /// What turns the mesh's normals into the world's (the inverse transpose of `to_world`'s
+    /// linear part).
+    pub normal: Mat3,
     /// Its first triangle's number among the instanced ones.
     pub first: u32,
+}
+
+impl Placement {
+    /// Instance `mesh` placed by `to_world`, its triangles numbered from `first`.
+    pub fn new(mesh: u32, to_world: Mat4, first: u32) -> Self {
+        Placement { mesh, to_world, normal: Mat3::from_mat4(to_world).inverse().transpose(), first }
+    }
 }
 
 /// Meshes drawn many times (a two-level BVH): one BVH per mesh in its own space, and a BVH over
@@ -179,7 +189,6 @@ impl InstancedBvh {
         let placed = &self.instances[instance];
         let (o, d) = self.local_ray(instance, origin, direction);
         let local = self.meshes[placed.mesh as usize].hit(nearest, o, d);
-        let normal = Mat3::from_mat4(placed.to_world).inverse().transpose();
         let p = placed.to_world.transform_point3(local.p);
         // How far rounding can have moved the point: the local figure grown by the transform, and
         // the point's own size.
@@ -188,7 +197,7 @@ impl InstancedBvh {
         Hit {
             triangle: first_triangle + placed.first + local.triangle,
             p,
-            ng: (normal * local.ng).normalize_or_zero(),
+            ng: (placed.normal * local.ng).normalize_or_zero(),
             scale: (3.0 * stretch * local.scale).max(p.abs().max_element()),
             ..local
         }

@@ -51,7 +51,7 @@ impl Instances {
         for (m, mesh) in meshes.iter().enumerate() {
             let node = world(mesh.node);
             for &matrix in &mesh.matrices {
-                placements.push(Placement { mesh: m as u32, to_world: node * matrix, first: first as u32 });
+                placements.push(Placement::new(m as u32, node * matrix, first as u32));
                 first += mesh.geometry.triangles.len();
             }
         }
@@ -92,10 +92,9 @@ impl Instances {
     pub fn surface(&self, t: usize, hit: &Hit, lambda: &Wavelengths) -> Surface {
         let (placed, local) = self.find(t);
         let linear = Mat3::from_mat4(placed.to_world);
-        let normal_matrix = linear.inverse().transpose();
         let mesh = &self.meshes[placed.mesh as usize];
         let mut surface =
-            mesh.surface_with_normal(local, hit, lambda, |n| (normal_matrix * n).normalize_or_zero());
+            mesh.surface_with_normal(local, hit, lambda, |n| (placed.normal * n).normalize_or_zero());
         let tangent = surface.inputs.tangent;
         if tangent != Vec4::ZERO {
             let turned = (linear * tangent.truncate()).normalize_or_zero();
