@@ -65,6 +65,22 @@ impl SpectralBins {
     }
 }
 
+/// One pixel's estimate of one pass: its radiance, its Laplacian term and its coverage.
+pub type Estimate = (SampledSpectrum, SampledSpectrum, f32);
+
+/// What one pass's estimates are weighed by in the film.
+struct PassWeights {
+    /// Each lane's XYZ per unit radiance.
+    lanes: [DVec3; LANES],
+    /// The white illuminant's XYZ estimate, and the luminance weight of the pass.
+    white_xyz: DVec3,
+    white_y: f64,
+    radius2: f64,
+    /// Each lane's spectral band and weight there (when the film keeps bands).
+    bands: Option<[usize; LANES]>,
+    band_weights: [f64; LANES],
+}
+
 /// The XYZ of lane values weighed by `weights` ([`Film::lane_weights`]).
 fn lanes_xyz(weights: &[DVec3; LANES], values: SampledSpectrum) -> DVec3 {
     weights.iter().zip(values.to_array()).map(|(w, v)| *w * f64::from(v)).sum()
@@ -184,7 +200,7 @@ impl Film {
         self.passes += other.passes;
         self.white_y += other.white_y;
         self.white_y_squared += other.white_y_squared;
-        self.non_finite_estimates += other.non_finite_estimates;
+        self.non_finite_estimates = self.non_finite_estimates.wrapping_add(other.non_finite_estimates);
     }
 
     /// Every per-pixel sum as an f64, pixel by pixel (`PIXEL_SUMS` each), then the spectral bands,
@@ -226,43 +242,81 @@ impl Film {
         radius: f32,
         estimates: impl Iterator<Item = (SampledSpectrum, SampledSpectrum, f32)>,
     ) {
-        let radius2 = f64::from(radius) * f64::from(radius);
-        let weights = self.lane_weights(lambda);
-        let lanes_xyz = |values: SampledSpectrum| lanes_xyz(&weights, values);
-        let white_xyz = lanes_xyz(lambda.d65);
+        let weights = self.pass_weights(lambda, radius);
+        self.white_y += weights.white_y;
+        self.white_y_squared += weights.white_y * weights.white_y;
+        self.white_xyz += weights.white_xyz;
+        self.passes += 1;
+        for (i, estimate) in estimates.enumerate().take(self.pixels.len()) {
+            self.add_estimate(&weights, i, estimate, 1.0);
+            self.pixels[i].passes += 1;
+        }
+    }
+
+    /// Adds, at some pixels, the difference between a frame's estimate and the common one that a
+    /// film of common estimates (shared by the frames of a block) received for the same pass:
+    /// this film then holds one frame's differences, and adding it to the common film gives the
+    /// frame's own sums (exactly, up to rounding). Pass counts are the common film's.
+    pub fn add_differences(
+        &mut self,
+        lambda: &Wavelengths,
+        radius: f32,
+        differences: impl Iterator<Item = (usize, Estimate, Estimate)>,
+    ) {
+        let weights = self.pass_weights(lambda, radius);
+        for (i, own, common) in differences {
+            self.add_estimate(&weights, i, own, 1.0);
+            self.add_estimate(&weights, i, common, -1.0);
+        }
+    }
+
+    /// What every pixel's estimate of one pass is weighed by.
+    fn pass_weights(&self, lambda: &Wavelengths, radius: f32) -> PassWeights {
+        let lanes = self.lane_weights(lambda);
+        let white_xyz = lanes_xyz(&lanes, lambda.d65);
         let white_y = match self.mode {
             FilmMode::Spectral => white_xyz.y,
             FilmMode::Monochromatic { .. } => 1.0,
         };
-        self.white_y += white_y;
-        self.white_y_squared += white_y * white_y;
-        self.white_xyz += white_xyz;
-        self.passes += 1;
-        let bands = (self.bins.count > 0).then(|| lambda.nm.to_array().map(|l| self.bins.band(l)));
-        let band_weights =
-            lambda.pdf.to_array().map(|p| 1.0 / (f64::from(p) * self.bins.width_nm() * LANES as f64));
-        for (i, (sums, (radiance, laplacian, coverage))) in self.pixels.iter_mut().zip(estimates).enumerate()
-        {
-            // A non-finite estimate would poison the pixel's sums for good: count it as zero and
-            // report it, so the image stays usable and the problem is not silent.
-            let (radiance, laplacian) = if radiance.is_finite() && laplacian.is_finite() {
-                (radiance, laplacian)
+        PassWeights {
+            lanes,
+            white_xyz,
+            white_y,
+            radius2: f64::from(radius) * f64::from(radius),
+            bands: (self.bins.count > 0).then(|| lambda.nm.to_array().map(|l| self.bins.band(l))),
+            band_weights: lambda
+                .pdf
+                .to_array()
+                .map(|p| 1.0 / (f64::from(p) * self.bins.width_nm() * LANES as f64)),
+        }
+    }
+
+    /// Adds `sign` (1 or -1) times pixel `i`'s estimate to its sums (not its pass count).
+    fn add_estimate(&mut self, w: &PassWeights, i: usize, (radiance, laplacian, coverage): Estimate, sign: f64) {
+        // A non-finite estimate would poison the pixel's sums for good: count it as zero and
+        // report it, so the image stays usable and the problem is not silent. (A film of
+        // differences takes back the common film's count: the sum wraps back.)
+        let (radiance, laplacian) = if radiance.is_finite() && laplacian.is_finite() {
+            (radiance, laplacian)
+        } else {
+            self.non_finite_estimates = if sign > 0.0 {
+                self.non_finite_estimates.wrapping_add(1)
             } else {
-                self.non_finite_estimates += 1;
-                (SampledSpectrum::ZERO, SampledSpectrum::ZERO)
+                self.non_finite_estimates.wrapping_sub(1)
             };
-            let xyz = lanes_xyz(radiance);
-            sums.xyz += xyz;
-            sums.y_squared += xyz.y * xyz.y;
-            sums.y_white += xyz.y * white_y;
-            sums.laplacian_y += radius2 * lanes_xyz(laplacian).y;
-            sums.coverage += f64::from(coverage);
-            sums.passes += 1;
-            if let Some(bands) = bands {
-                let pixel_bins = &mut self.bins.sums[i * self.bins.count..][..self.bins.count];
-                for k in 0..LANES {
-                    pixel_bins[bands[k]] += f64::from(radiance[k]) * band_weights[k];
-                }
+            (SampledSpectrum::ZERO, SampledSpectrum::ZERO)
+        };
+        let xyz = lanes_xyz(&w.lanes, radiance) * sign;
+        let sums = &mut self.pixels[i];
+        sums.xyz += xyz;
+        sums.y_squared += sign * (xyz.y * xyz.y);
+        sums.y_white += xyz.y * w.white_y;
+        sums.laplacian_y += w.radius2 * lanes_xyz(&w.lanes, laplacian).y * sign;
+        sums.coverage += f64::from(coverage) * sign;
+        if let Some(bands) = w.bands {
+            let pixel_bins = &mut self.bins.sums[i * self.bins.count..][..self.bins.count];
+            for k in 0..LANES {
+                pixel_bins[bands[k]] += f64::from(radiance[k]) * w.band_weights[k] * sign;
             }
         }
     }

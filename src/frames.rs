@@ -6,6 +6,7 @@
 //! samples one time in the frame's shutter (DESIGN.md step 1), shared by its eye rays and photons.
 
 use std::ops::Range;
+use std::borrow::Cow;
 use std::path::{Path, PathBuf};
 use std::sync::Arc;
 use std::time::{Duration, Instant};
@@ -22,7 +23,9 @@ use crate::scene::description::{LensSettings, Shutter};
 use crate::scene::pose::lens;
 use crate::scene::{Description, Prepared, Scene, TimeRange, DEFAULT_RADIUS_FRACTION};
 pub use crate::sppm::LightSampling;
-use crate::sppm::{run_shared_pass, Crop, PassSamples, PassStats, PixelEstimate, Renderer, SppmSettings};
+use rayon::prelude::*;
+
+use crate::sppm::{run_shared_pass, Crop, FrameEstimates, PassSamples, PassStats, PixelEstimate, Renderer, SppmSettings};
 
 /// Set when the user asks the render to stop (Ctrl-C, SIGTERM): the pass in flight finishes,
 /// frames not yet written are dropped, and the render ends with an error naming what was kept.
@@ -549,6 +552,9 @@ fn render_block(
     let progress = Progress::new(settings.progress, frames, limit);
     let share = shot.shares(settings, frames.len());
     let first_pass = settings.partial_passes.as_ref().map_or(0, |r| r.start);
+    // With frames that share pixel estimates: the film of the common ones (each frame's own
+    // film then holds its differences from it).
+    let mut common: Option<Film> = None;
     let mut done = 0;
     while !active.is_empty() {
         let start = Instant::now();
@@ -564,7 +570,8 @@ fn render_block(
         let (mut accumulation, mut shared) = (Duration::ZERO, Duration::ZERO);
         if share {
             let stats;
-            (stats, shared) = shared_pass(shot, &poses, &samples, &mut active, &mut accumulation);
+            (stats, shared) =
+                shared_pass(shot, &poses, &samples, &mut active, &mut common, &mut accumulation);
             report.shared_stats = report.shared_stats + stats;
         } else {
             for (frame, posed) in active.iter_mut().zip(&poses) {
@@ -597,7 +604,11 @@ fn render_block(
         let photons = done * s.photons_per_pass as u64;
         let mut target_met = Vec::with_capacity(active.len());
         for frame in &mut active {
-            target_met.push(frame.monitor.after_pass(&frame.film, frame.elapsed_s, photons)?);
+            let met = match frame.monitor.measures_after(done) {
+                true => frame.monitor.after_pass(&whole_film(&frame.film, &common), frame.elapsed_s, photons)?,
+                false => false,
+            };
+            target_met.push(met);
         }
         let rendered: Vec<i32> = active.iter().map(|f| f.frame).collect();
         progress.update(&rendered, done, active[0].elapsed_s, active[0].monitor.status());
@@ -610,20 +621,19 @@ fn render_block(
                 unfinished.join(", ")
             ));
         }
-        let (mut still_running, mut their_poses) = (Vec::new(), Vec::new());
+        let (mut still_running, mut their_poses, mut stopped) = (Vec::new(), Vec::new(), Vec::new());
         for ((frame, own), met) in active.into_iter().zip(own_poses).zip(target_met) {
-            match stop_reason(settings, &frame, met, limit) {
-                Some(stopped_by) => {
-                    let writing = Instant::now();
-                    finish_frame(shot, settings, frame, photons, stopped_by, report)?;
-                    report.time_split.output += writing.elapsed().as_secs_f64();
-                }
+            match stop_reason(settings, &frame, done, met, limit) {
+                Some(stopped_by) => stopped.push((frame, stopped_by)),
                 None => {
                     still_running.push(frame);
                     their_poses.push(own);
                 }
             }
         }
+        let writing = Instant::now();
+        finish_frames(shot, settings, stopped, &common, photons, report)?;
+        report.time_split.output += writing.elapsed().as_secs_f64();
         (active, own_poses) = (still_running, their_poses);
     }
     progress.finish();
@@ -632,12 +642,14 @@ fn render_block(
 
 /// Runs pass `samples.index` for every active frame at once, sharing paths between them; gives
 /// the work done once and its time, and adds the time spent adding estimates to films to
-/// `accumulation`.
+/// `accumulation`. Where the frames share pixel estimates, those go to the `common` film once
+/// and each frame's film gets its differences.
 fn shared_pass(
     shot: &Shot,
     poses: &[Posed],
     samples: &PassSamples,
     active: &mut [FrameInProgress],
+    common: &mut Option<Film>,
     accumulation: &mut Duration,
 ) -> (PassStats, Duration) {
     let s = &shot.sppm;
@@ -654,9 +666,36 @@ fn shared_pass(
     let share_eyes = !shot.prepared.camera_moves() && !shot.prepared.lights_move();
     run_shared_pass(&statics, &renderers, samples, share_eyes, |out| {
         let adding = Instant::now();
-        add_pass(&mut active[out.frame], samples, &out.estimates, out.stats);
+        let frame = &mut active[out.frame];
+        match out.estimates {
+            FrameEstimates::Every(estimates) => add_estimates(&mut frame.film, samples, &estimates),
+            FrameEstimates::Beside { common: estimates, differing } => {
+                if out.frame == 0 {
+                    let film = &frame.film;
+                    let new = || Film::new(film.width, film.height, film.mode, film.bins.count, false);
+                    add_estimates(common.get_or_insert_with(new), samples, estimates);
+                }
+                let sums = |e: &PixelEstimate| (e.radiance, e.laplacian, e.coverage);
+                let differences =
+                    differing.iter().map(|(p, e)| (*p as usize, sums(e), sums(&estimates[*p as usize])));
+                frame.film.add_differences(&samples.wavelengths, samples.radius, differences);
+            }
+        }
+        frame.stats = frame.stats + out.stats;
         *accumulation += adding.elapsed();
     })
+}
+
+/// A frame's whole film: its own, or the block's common film plus its differences from it.
+fn whole_film<'a>(film: &'a Film, common: &Option<Film>) -> Cow<'a, Film> {
+    match common {
+        Some(common) => {
+            let mut whole = common.clone();
+            whole.add(film);
+            Cow::Owned(whole)
+        }
+        None => Cow::Borrowed(film),
+    }
 }
 
 /// Adds one pass's estimates to a frame.
@@ -683,15 +722,15 @@ pub fn write_frame(film: &Film, errors: &[PixelError], path: &Path) -> Result<()
     film.write_exr(path, &[("Error.Y", bound), ("Variance.Y", variance)])
 }
 
-/// What stops `frame`, if anything: its target error (`target_met`, as its monitor found), its
+/// What stops `frame`, after `passes` passes, if anything: its target error (`target_met`, as its monitor found), its
 /// time budget or the pass count.
 fn stop_reason(
     settings: &RenderSettings,
     frame: &FrameInProgress,
+    passes: u64,
     target_met: bool,
     limit: Option<u64>,
 ) -> Option<StopReason> {
-    let passes = frame.film.passes;
     if target_met {
         Some(StopReason::TargetError)
     } else if settings.time_budget_s.is_some_and(|budget| frame.elapsed_s >= budget) {
@@ -703,56 +742,73 @@ fn stop_reason(
     }
 }
 
-/// Writes a stopped frame's EXR (with its error passes, after `photons` photon paths), announces it and reports it.
-fn finish_frame(
+/// Writes the EXRs of frames stopped after the same pass (with their error passes, after
+/// `photons` photon paths; several at once), announces them and reports them in order.
+fn finish_frames(
     shot: &Shot,
     settings: &RenderSettings,
-    mut frame: FrameInProgress,
+    stopped: Vec<(FrameInProgress, StopReason)>,
+    common: &Option<Film>,
     photons: u64,
-    stopped_by: StopReason,
     report: &mut RenderReport,
 ) -> Result<(), String> {
-    let film = frame.film;
-    let errors = frame.monitor.finish(&film, frame.elapsed_s, photons, stopped_by)?;
-    if film.non_finite_estimates > 0 {
-        eprintln!(
-            "caustic: warning: frame {}: {} pixel estimates were NaN or infinite and counted as zero (please report this scene)",
-            frame.frame, film.non_finite_estimates
-        );
+    let mut finished = Vec::with_capacity(stopped.len());
+    for (mut frame, stopped_by) in stopped {
+        let film = whole_film(&frame.film, common).into_owned();
+        let errors = frame.monitor.finish(&film, frame.elapsed_s, photons, stopped_by)?;
+        if film.non_finite_estimates > 0 {
+            eprintln!(
+                "caustic: warning: frame {}: {} pixel estimates were NaN or infinite and counted as zero (please report this scene)",
+                frame.frame, film.non_finite_estimates
+            );
+        }
+        finished.push((frame, stopped_by, film, errors));
     }
-    let path = output_path(settings, frame.frame);
+    let written: Vec<Result<PathBuf, String>> = finished
+        .par_iter()
+        .map(|(frame, _, film, errors)| write_output(shot, settings, frame.frame, film, errors))
+        .collect();
+    for ((frame, stopped_by, film, errors), path) in finished.into_iter().zip(written) {
+        let path = path?;
+        Progress::written(
+            settings.progress,
+            frame.frame,
+            &path,
+            film.passes,
+            frame.elapsed_s,
+            stopped_by.as_str(),
+        );
+        report.frames.push(FrameReport {
+            frame: frame.frame,
+            path,
+            passes: film.passes,
+            elapsed_s: frame.elapsed_s,
+            stats: frame.stats,
+            stopped_by,
+            error: summarize(&errors),
+        });
+    }
+    Ok(())
+}
+
+/// Writes a frame's EXR, or its partial result; gives its path.
+fn write_output(
+    shot: &Shot,
+    settings: &RenderSettings,
+    frame: i32,
+    film: &Film,
+    errors: &[PixelError],
+) -> Result<PathBuf, String> {
+    let path = output_path(settings, frame);
     match (&settings.partial_passes, &shot.identity) {
         (Some(passes), Some((sha256, fingerprint))) => {
-            let header = partial::header(
-                &settings.scene,
-                sha256.clone(),
-                fingerprint.clone(),
-                frame.frame,
-                passes.clone(),
-                &film,
-            );
-            partial::write(&path, &header, &film)?;
+            let header =
+                partial::header(&settings.scene, sha256.clone(), fingerprint.clone(), frame, passes.clone(), film);
+            partial::write(&path, &header, film)?;
         }
-        _ => write_frame(&film, &errors, &path)?,
+        _ => write_frame(film, errors, &path)?,
     }
-    Progress::written(
-        settings.progress,
-        frame.frame,
-        &path,
-        film.passes,
-        frame.elapsed_s,
-        stopped_by.as_str(),
-    );
-    report.frames.push(FrameReport {
-        frame: frame.frame,
-        path,
-        passes: film.passes,
-        elapsed_s: frame.elapsed_s,
-        stats: frame.stats,
-        stopped_by,
-        error: summarize(&errors),
-    });
-    Ok(())
+    Ok(path)
 }
 
 /// Adds up partial results into `OUT/frame_####.exr`, one per frame they hold, with the error

@@ -230,12 +230,19 @@ impl Monitor {
         self.status
     }
 
+    /// Whether [`Monitor::after_pass`] measures the error after `passes` passes (else it does
+    /// not read the film).
+    pub fn measures_after(&self, passes: u64) -> bool {
+        let log_due = self.log.is_some() && passes >= self.next_log_pass;
+        log_due || passes >= self.next_status_pass || self.settings.target.is_some()
+    }
+
     /// Called after each pass: measures the error when due (passes 1, 2, 4, ..., or every pass
     /// with a target), logs it when due, and says whether the target error is met.
     pub fn after_pass(&mut self, film: &Film, elapsed_s: f64, photons: u64) -> Result<bool, String> {
         let log_due = self.log.is_some() && film.passes >= self.next_log_pass;
         let status_due = film.passes >= self.next_status_pass;
-        if !log_due && !status_due && self.settings.target.is_none() {
+        if !self.measures_after(film.passes) {
             return Ok(false);
         }
         let errors = pixel_errors(film, self.settings.confidence);

@@ -23,4 +23,4 @@ pub use renderer::{
     Crop, LightSampling, PassSamples, PassStats, PixelEstimate, Renderer, SppmSettings, VisiblePoint,
     MAX_DEPTH,
 };
-pub use shared::{run_shared_pass, SharedPassOutput};
+pub use shared::{run_shared_pass, FrameEstimates, SharedPassOutput};

@@ -16,12 +16,14 @@
 //! per frame.
 
 use std::ops::Range;
+use std::sync::Arc;
 
 use glam::Vec3;
 use rayon::prelude::*;
 
 use super::direct::ShadowRay;
 use super::gather::{sum_over, FirstRound, PhotonSet, PhotonSums};
+use super::grid::PhotonGrid;
 use super::photons::{continue_photon, photon_chunks, start_photon, trace_photon, Photon, PhotonState};
 use super::renderer::{collect_counting, PassSamples, PassStats, PixelEstimate, Renderer};
 use super::visible::{
@@ -99,13 +101,41 @@ struct EyeRecord {
 }
 
 /// What [`run_shared_pass`] hands each frame: its pixel estimates and the work it did itself.
-pub struct SharedPassOutput {
+pub struct SharedPassOutput<'a> {
     /// The frame's index in the block.
     pub frame: usize,
-    /// Its pixel estimates, row-major.
-    pub estimates: Vec<PixelEstimate>,
+    /// Its pixel estimates.
+    pub estimates: FrameEstimates<'a>,
     /// Tests against its moving triangles and the paths resumed in it.
     pub stats: PassStats,
+}
+
+/// A frame's pixel estimates for one pass.
+pub enum FrameEstimates<'a> {
+    /// Every pixel's, row-major.
+    Every(Vec<PixelEstimate>),
+    /// Where the frame differs from the block's common estimates. Every other pixel's estimate
+    /// is the common one, bit for bit.
+    Beside {
+        /// Every pixel's estimate from the shared eye paths and the photons every frame keeps
+        /// (the same slice for every frame of the pass).
+        common: &'a [PixelEstimate],
+        /// The frame's own estimates at the pixels where its eye path changed or its own
+        /// photons reach the visible point, in pixel order.
+        differing: Vec<(u32, PixelEstimate)>,
+    },
+}
+
+/// Eye paths traced once for every frame, and what their gathers share.
+struct SharedEyes {
+    records: Vec<EyeRecord>,
+    /// The pixels whose path or direct light meets the swept box (frames test those), in order.
+    watched: Vec<u32>,
+    /// Each pixel's first round over the common photons.
+    common_rounds: Vec<FirstRound>,
+    /// Each pixel's estimate from the common photons alone, and its visible points bucketed by
+    /// position; when frames share estimates (their surfaces' open edges are the same).
+    common: Option<(Vec<PixelEstimate>, PointGrid)>,
 }
 
 /// Renders `pass` for every frame of `frames` (each posed at its own time for this pass, all
@@ -130,45 +160,157 @@ pub fn run_shared_pass(
         .collect();
     let common = common_photons(&shared, &always_valid);
     let common_set = PhotonSet::new(&common, pass.radius, &statics.scene.open_edges);
-    let eyes = share_eyes.then(|| trace_shared_eyes(statics, pass, swept));
-    let common_first_round =
-        |eye: &EyeResult| eye.point.map_or(FirstRound::default(), |vp| common_set.first_round(&vp));
-    let common_rounds: Vec<FirstRound> = match &eyes {
-        Some((records, eye_stats)) => {
-            stats = stats + *eye_stats;
-            records.par_iter().with_min_len(64).map(|r| common_first_round(&r.end.result)).collect()
-        }
-        None => Vec::new(),
-    };
+    let same_edges = frames.iter().all(|f| Arc::ptr_eq(&f.scene.open_edges, &statics.scene.open_edges));
+    let eyes = share_eyes.then(|| {
+        let (eyes, eye_stats) = trace_shared_eyes(statics, pass, swept, &common_set, same_edges);
+        stats = stats + eye_stats;
+        eyes
+    });
     let shared_time = start.elapsed();
     for (index, (frame, (photons, photon_stats))) in frames.iter().zip(&checked).enumerate() {
         let own = own_photons(&shared, &always_valid, photons);
         let own_set = PhotonSet::new(&own, pass.radius, &frame.scene.open_edges);
-        let pixels = (frame.settings.width * frame.settings.height) as usize;
-        let (estimates, eye_stats) = collect_counting(pixels, |pixel| {
-            let (eye, common_round, eye_stats) = match &eyes {
-                Some((records, _)) => match frame_eye(frame, pass, &records[pixel]) {
-                    (eye, false, s) => (eye, common_rounds[pixel], s),
-                    (eye, true, s) => {
-                        let round = common_first_round(&eye);
-                        (eye, round, s)
-                    }
-                },
-                None => {
-                    let (eye, s) = trace_eye_path(frame, pass, pixel);
-                    let round = common_first_round(&eye);
-                    (eye, round, s)
+        let sets = GatherSets { common: &common_set, own: &own_set };
+        let (estimates, eye_stats) = match &eyes {
+            Some(eyes) => match &eyes.common {
+                Some((common, points)) => {
+                    let near = points.near(&own);
+                    if std::env::var("CAUSTIC_DEBUG").is_ok() {
+                        let removed: usize = shared.records.iter().zip(&photons.valid).map(|(r, v)| r.photons.len() - v).sum();
+                        let resumed: usize = photons.own.iter().map(|o| o.len()).sum();
+                        let all = shared.photons.len();
+                        let removed_paths = shared.records.iter().zip(&photons.valid).filter(|(r, v)| r.photons.len() > **v).count();
+                        eprintln!("frame {index}: own {} near {} watched {} all {all} removed {removed} resumed {resumed} removed_paths {removed_paths} records {}", own.len(), near.len(), eyes.watched.len(), shared.records.len()); }
+                    let (differing, s) = differing_estimates(frame, pass, eyes, sets, near);
+                    if std::env::var("CAUSTIC_DEBUG").is_ok() { eprintln!("  differing {}", differing.len()); }
+                    (FrameEstimates::Beside { common, differing }, s)
                 }
-            };
-            let sums = eye.point.map_or(PhotonSums::default(), |vp| {
-                sum_over(&vp, &[(&common_set, common_round), (&own_set, own_set.first_round(&vp))])
-            });
-            (own_set.estimate(&eye, sums), eye_stats)
-        });
+                None => {
+                    let pixels = eyes.records.len();
+                    let (estimates, s) = collect_counting(pixels, |pixel| {
+                        let (change, s) = frame_eye(frame, pass, &eyes.records[pixel]);
+                        (sets.estimate(eyes, pixel, change), s)
+                    });
+                    (FrameEstimates::Every(estimates), s)
+                }
+            },
+            None => {
+                let pixels = (frame.settings.width * frame.settings.height) as usize;
+                let (estimates, s) = collect_counting(pixels, |pixel| {
+                    let (eye, s) = trace_eye_path(frame, pass, pixel);
+                    (sets.estimate_with(&eye, None), s)
+                });
+                (FrameEstimates::Every(estimates), s)
+            }
+        };
         let frame_stats = *photon_stats + eye_stats;
         consume(SharedPassOutput { frame: index, estimates, stats: frame_stats });
     }
     (stats, shared_time)
+}
+
+/// The photon sets a frame gathers from: the common photons and its own.
+#[derive(Clone, Copy)]
+struct GatherSets<'a> {
+    common: &'a PhotonSet,
+    own: &'a PhotonSet,
+}
+
+impl GatherSets<'_> {
+    /// The estimate of pixel `pixel` of a shared eye pass, as its path changed in the frame.
+    fn estimate(self, eyes: &SharedEyes, pixel: usize, change: EyeChange) -> PixelEstimate {
+        let shared = || eyes.records[pixel].end.result;
+        match change {
+            EyeChange::Same => self.estimate_with(&shared(), Some(eyes.common_rounds[pixel])),
+            EyeChange::Direct(eye) => self.estimate_with(&eye, Some(eyes.common_rounds[pixel])),
+            EyeChange::Resumed(eye) => self.estimate_with(&eye, None),
+        }
+    }
+
+    /// The estimate of an eye path whose first round over the common photons is `common_round`
+    /// (found here when `None`).
+    fn estimate_with(self, eye: &EyeResult, common_round: Option<FirstRound>) -> PixelEstimate {
+        let sums = eye.point.map_or(PhotonSums::default(), |vp| {
+            let common_round = common_round.unwrap_or_else(|| self.common.first_round(&vp));
+            sum_over(&vp, &[(self.common, common_round), (self.own, self.own.first_round(&vp))])
+        });
+        self.own.estimate(eye, sums)
+    }
+}
+
+/// A frame's estimates at the pixels where they differ from the common ones: those whose
+/// watched path its moving triangles change, and `near` (those whose visible point its own
+/// photons reach), in pixel order.
+fn differing_estimates(
+    frame: &Renderer,
+    pass: &PassSamples,
+    eyes: &SharedEyes,
+    sets: GatherSets,
+    near: Vec<u32>,
+) -> (Vec<(u32, PixelEstimate)>, PassStats) {
+    let (changes, stats) = collect_counting(eyes.watched.len(), |i| {
+        frame_eye(frame, pass, &eyes.records[eyes.watched[i] as usize])
+    });
+    let changed = eyes.watched.iter().zip(changes).filter(|(_, c)| !matches!(c, EyeChange::Same));
+    let mut pixels: Vec<(u32, EyeChange)> = changed.map(|(&p, c)| (p, c)).collect();
+    let unchanged_near = near.into_iter().filter(|p| pixels.binary_search_by_key(p, |(q, _)| *q).is_err());
+    let unchanged_near: Vec<u32> = unchanged_near.collect();
+    pixels.extend(unchanged_near.into_iter().map(|p| (p, EyeChange::Same)));
+    pixels.sort_unstable_by_key(|(p, _)| *p);
+    let estimates = pixels
+        .into_par_iter()
+        .with_min_len(64)
+        .map(|(pixel, change)| (pixel, sets.estimate(eyes, pixel as usize, change)))
+        .collect();
+    (estimates, stats)
+}
+
+/// Visible points bucketed by position, to find those a frame's own photons reach.
+struct PointGrid {
+    grid: PhotonGrid,
+    /// The sorted points' pixels and positions.
+    pixels: Vec<u32>,
+    positions: Vec<Vec3>,
+    radius: f32,
+}
+
+impl PointGrid {
+    fn new(records: &[EyeRecord], radius: f32) -> Self {
+        let (pixels, points): (Vec<u32>, Vec<Vec3>) = records
+            .iter()
+            .enumerate()
+            .filter_map(|(pixel, r)| r.end.result.point.map(|vp| (pixel as u32, vp.p)))
+            .unzip();
+        let (grid, order) = PhotonGrid::build(&points, radius);
+        PointGrid {
+            grid,
+            pixels: order.iter().map(|&i| pixels[i as usize]).collect(),
+            positions: order.iter().map(|&i| points[i as usize]).collect(),
+            radius,
+        }
+    }
+
+    /// The pixels, in order, whose visible point lies within the radius of some photon (with a
+    /// margin for rounding: a gather counts a photon by the same distance computed otherwise).
+    fn near(&self, photons: &[Photon]) -> Vec<u32> {
+        let reach2 = self.radius * self.radius * 1.001;
+        let mut pixels: Vec<u32> = photons
+            .par_chunks(256)
+            .flat_map_iter(|chunk| {
+                let mut found = Vec::new();
+                for photon in chunk {
+                    self.grid.for_each_near(photon.p, |range| {
+                        let within = range.filter(|&i| self.positions[i].distance_squared(photon.p) < reach2);
+                        found.extend(within.map(|i| self.pixels[i]));
+                    });
+                }
+                found
+            })
+            .collect();
+        pixels.sort_unstable();
+        pixels.dedup();
+        pixels
+    }
 }
 
 /// Traces every photon path of `pass` against the static triangles, keeping the segments that
@@ -280,10 +422,18 @@ fn own_photons(shared: &SharedPhotons, always_valid: &[usize], frame: &FramePhot
     own
 }
 
-/// Traces every pixel's eye path against the static triangles, keeping what the frames check.
-fn trace_shared_eyes(statics: &Renderer, pass: &PassSamples, swept: Swept) -> (Vec<EyeRecord>, PassStats) {
+/// Traces every pixel's eye path against the static triangles, keeping what the frames check,
+/// and gathers the common photons at each; with `common estimates`, finishes every pixel's
+/// estimate from them alone and buckets the visible points.
+fn trace_shared_eyes(
+    statics: &Renderer,
+    pass: &PassSamples,
+    swept: Swept,
+    common_set: &PhotonSet,
+    common_estimates: bool,
+) -> (SharedEyes, PassStats) {
     let pixels = (statics.settings.width * statics.settings.height) as usize;
-    let records: Vec<(EyeRecord, PassStats)> = (0..pixels)
+    let traced: Vec<(EyeRecord, FirstRound, PassStats)> = (0..pixels)
         .into_par_iter()
         .with_min_len(64)
         .map(|pixel| {
@@ -307,41 +457,70 @@ fn trace_shared_eyes(statics: &Renderer, pass: &PassSamples, swept: Swept) -> (V
                 }
             });
             let direct_watched = end.direct.map(|t| t.ray.is_some_and(|r| swept.meets(r)));
-            (EyeRecord { end, watched, direct_watched }, start_stats + stats)
+            let round = end.result.point.map_or(FirstRound::default(), |vp| common_set.first_round(&vp));
+            (EyeRecord { end, watched, direct_watched }, round, start_stats + stats)
         })
         .collect();
-    let stats = records.iter().map(|(_, s)| *s).sum();
-    (records.into_iter().map(|(r, _)| r).collect(), stats)
+    let stats = traced.iter().map(|(_, _, s)| *s).sum();
+    let (records, common_rounds): (Vec<EyeRecord>, Vec<FirstRound>) =
+        traced.into_iter().map(|(record, round, _)| (record, round)).unzip();
+    let watched = (0..records.len() as u32)
+        .filter(|&p| {
+            let r = &records[p as usize];
+            !r.watched.is_empty() || r.direct_watched.contains(&true)
+        })
+        .collect();
+    let common = common_estimates.then(|| {
+        let estimates = records
+            .par_iter()
+            .zip(&common_rounds)
+            .with_min_len(64)
+            .map(|(r, &round)| {
+                let eye = &r.end.result;
+                let sums = eye.point.map_or(PhotonSums::default(), |vp| sum_over(&vp, &[(common_set, round)]));
+                common_set.estimate(eye, sums)
+            })
+            .collect();
+        (estimates, PointGrid::new(&records, pass.radius))
+    });
+    (SharedEyes { records, watched, common_rounds, common }, stats)
 }
 
-/// A shared eye path as `frame` sees it, and whether the frame had to resume it (its visible
-/// point is then its own).
-fn frame_eye(frame: &Renderer, pass: &PassSamples, record: &EyeRecord) -> (EyeResult, bool, PassStats) {
+/// How a frame's moving triangles change a shared eye path.
+enum EyeChange {
+    /// Not at all.
+    Same,
+    /// They block some of the direct light at its visible point.
+    Direct(EyeResult),
+    /// They block it: the frame resumed it, and its visible point is its own.
+    Resumed(EyeResult),
+}
+
+/// How `frame`'s moving triangles change a shared eye path, and the tests that took.
+fn frame_eye(frame: &Renderer, pass: &PassSamples, record: &EyeRecord) -> (EyeChange, PassStats) {
     let mut stats = PassStats::default();
     for w in &record.watched {
         stats.moving_tests += 1;
         if frame.accel.moving_occluded(w.ray.origin, w.ray.direction, w.ray.t_max) {
             let (end, resumed) = continue_eye_path(frame, pass, w.state.clone(), |_| {});
-            return (end.result, true, stats + resumed);
+            return (EyeChange::Resumed(end.result), stats + resumed);
         }
     }
     let end = &record.end;
     let Some(vp) = end.result.point else {
-        return (end.result, false, stats);
+        return (EyeChange::Same, stats);
     };
-    let values = [0, 1].map(|i| {
-        let term = end.direct[i];
-        let blocked = record.direct_watched[i]
-            && term.ray.is_some_and(|r| {
+    let blocked = [0, 1].map(|i| {
+        record.direct_watched[i]
+            && end.direct[i].ray.is_some_and(|r| {
                 stats.moving_tests += 1;
                 frame.accel.moving_occluded(r.origin, r.direction, r.t_max)
-            });
-        if blocked {
-            SampledSpectrum::ZERO
-        } else {
-            term.value
-        }
+            })
     });
+    if blocked == [false; 2] {
+        return (EyeChange::Same, stats);
+    }
+    let values = [0, 1].map(|i| if blocked[i] { SampledSpectrum::ZERO } else { end.direct[i].value });
     let radiance = with_direct(end.radiance_before, vp.beta, values);
-    (EyeResult { radiance, ..end.result }, false, stats)
+    (EyeChange::Direct(EyeResult { radiance, ..end.result }), stats)
 }
