@@ -16,6 +16,7 @@
 //! per frame.
 
 use std::ops::Range;
+use std::sync::atomic::{AtomicU64, Ordering};
 use std::sync::Arc;
 
 use glam::Vec3;
@@ -98,6 +99,8 @@ struct EyeRecord {
     watched: Vec<Watched<EyeState>>,
     /// Which direct-light rays meet the swept box.
     direct_watched: [bool; 2],
+    /// Its first round over the common photons.
+    common_round: FirstRound,
 }
 
 /// What [`run_shared_pass`] hands each frame: its pixel estimates and the work it did itself.
@@ -131,8 +134,6 @@ struct SharedEyes {
     records: Vec<EyeRecord>,
     /// The pixels whose path or direct light meets the swept box (frames test those), in order.
     watched: Vec<u32>,
-    /// Each pixel's first round over the common photons.
-    common_rounds: Vec<FirstRound>,
     /// Each pixel's estimate from the common photons alone, and its visible points bucketed by
     /// position; when frames share estimates (their surfaces' open edges are the same).
     common: Option<(Vec<PixelEstimate>, PointGrid)>,
@@ -174,15 +175,7 @@ pub fn run_shared_pass(
         let (estimates, eye_stats) = match &eyes {
             Some(eyes) => match &eyes.common {
                 Some((common, points)) => {
-                    let near = points.near(&own);
-                    if std::env::var("CAUSTIC_DEBUG").is_ok() {
-                        let removed: usize = shared.records.iter().zip(&photons.valid).map(|(r, v)| r.photons.len() - v).sum();
-                        let resumed: usize = photons.own.iter().map(|o| o.len()).sum();
-                        let all = shared.photons.len();
-                        let removed_paths = shared.records.iter().zip(&photons.valid).filter(|(r, v)| r.photons.len() > **v).count();
-                        eprintln!("frame {index}: own {} near {} watched {} all {all} removed {removed} resumed {resumed} removed_paths {removed_paths} records {}", own.len(), near.len(), eyes.watched.len(), shared.records.len()); }
-                    let (differing, s) = differing_estimates(frame, pass, eyes, sets, near);
-                    if std::env::var("CAUSTIC_DEBUG").is_ok() { eprintln!("  differing {}", differing.len()); }
+                    let (differing, s) = differing_estimates(frame, pass, eyes, points, sets, &own);
                     (FrameEstimates::Beside { common, differing }, s)
                 }
                 None => {
@@ -221,8 +214,8 @@ impl GatherSets<'_> {
     fn estimate(self, eyes: &SharedEyes, pixel: usize, change: EyeChange) -> PixelEstimate {
         let shared = || eyes.records[pixel].end.result;
         match change {
-            EyeChange::Same => self.estimate_with(&shared(), Some(eyes.common_rounds[pixel])),
-            EyeChange::Direct(eye) => self.estimate_with(&eye, Some(eyes.common_rounds[pixel])),
+            EyeChange::Same => self.estimate_with(&shared(), Some(eyes.records[pixel].common_round)),
+            EyeChange::Direct(eye) => self.estimate_with(&eye, Some(eyes.records[pixel].common_round)),
             EyeChange::Resumed(eye) => self.estimate_with(&eye, None),
         }
     }
@@ -239,30 +232,63 @@ impl GatherSets<'_> {
 }
 
 /// A frame's estimates at the pixels where they differ from the common ones: those whose
-/// watched path its moving triangles change, and `near` (those whose visible point its own
-/// photons reach), in pixel order.
+/// watched path its moving triangles change, and those whose visible point its `own` photons
+/// reach, in pixel order.
 fn differing_estimates(
     frame: &Renderer,
     pass: &PassSamples,
     eyes: &SharedEyes,
+    points: &PointGrid,
     sets: GatherSets,
-    near: Vec<u32>,
+    own: &[Photon],
 ) -> (Vec<(u32, PixelEstimate)>, PassStats) {
     let (changes, stats) = collect_counting(eyes.watched.len(), |i| {
         frame_eye(frame, pass, &eyes.records[eyes.watched[i] as usize])
     });
-    let changed = eyes.watched.iter().zip(changes).filter(|(_, c)| !matches!(c, EyeChange::Same));
-    let mut pixels: Vec<(u32, EyeChange)> = changed.map(|(&p, c)| (p, c)).collect();
-    let unchanged_near = near.into_iter().filter(|p| pixels.binary_search_by_key(p, |(q, _)| *q).is_err());
-    let unchanged_near: Vec<u32> = unchanged_near.collect();
-    pixels.extend(unchanged_near.into_iter().map(|p| (p, EyeChange::Same)));
-    pixels.sort_unstable_by_key(|(p, _)| *p);
-    let estimates = pixels
+    let marks = PixelMarks::new(eyes.records.len());
+    for (&pixel, change) in eyes.watched.iter().zip(&changes) {
+        if !matches!(change, EyeChange::Same) {
+            marks.mark(pixel);
+        }
+    }
+    points.mark_near(own, &marks);
+    let change = |pixel: u32| match eyes.watched.binary_search(&pixel) {
+        Ok(i) => changes[i].clone(),
+        Err(_) => EyeChange::Same,
+    };
+    let estimates = marks
+        .marked()
         .into_par_iter()
         .with_min_len(64)
-        .map(|(pixel, change)| (pixel, sets.estimate(eyes, pixel as usize, change)))
+        .map(|pixel| (pixel, sets.estimate(eyes, pixel as usize, change(pixel))))
         .collect();
     (estimates, stats)
+}
+
+/// A mark per pixel, set from any thread.
+struct PixelMarks(Vec<AtomicU64>);
+
+impl PixelMarks {
+    fn new(pixels: usize) -> Self {
+        PixelMarks((0..pixels.div_ceil(64)).map(|_| AtomicU64::new(0)).collect())
+    }
+
+    fn mark(&self, pixel: u32) {
+        self.0[pixel as usize / 64].fetch_or(1 << (pixel % 64), Ordering::Relaxed);
+    }
+
+    /// The marked pixels, in order.
+    fn marked(&self) -> Vec<u32> {
+        let mut pixels = Vec::new();
+        for (w, word) in self.0.iter().enumerate() {
+            let mut bits = word.load(Ordering::Relaxed);
+            while bits != 0 {
+                pixels.push(w as u32 * 64 + bits.trailing_zeros());
+                bits &= bits - 1;
+            }
+        }
+        pixels
+    }
 }
 
 /// Visible points bucketed by position, to find those a frame's own photons reach.
@@ -290,26 +316,19 @@ impl PointGrid {
         }
     }
 
-    /// The pixels, in order, whose visible point lies within the radius of some photon (with a
+    /// Marks the pixels whose visible point lies within the radius of some photon (with a
     /// margin for rounding: a gather counts a photon by the same distance computed otherwise).
-    fn near(&self, photons: &[Photon]) -> Vec<u32> {
+    fn mark_near(&self, photons: &[Photon], marks: &PixelMarks) {
         let reach2 = self.radius * self.radius * 1.001;
-        let mut pixels: Vec<u32> = photons
-            .par_chunks(256)
-            .flat_map_iter(|chunk| {
-                let mut found = Vec::new();
-                for photon in chunk {
-                    self.grid.for_each_near(photon.p, |range| {
-                        let within = range.filter(|&i| self.positions[i].distance_squared(photon.p) < reach2);
-                        found.extend(within.map(|i| self.pixels[i]));
-                    });
+        photons.par_iter().with_min_len(64).for_each(|photon| {
+            self.grid.for_each_near(photon.p, |range| {
+                for i in range {
+                    if self.positions[i].distance_squared(photon.p) < reach2 {
+                        marks.mark(self.pixels[i]);
+                    }
                 }
-                found
-            })
-            .collect();
-        pixels.sort_unstable();
-        pixels.dedup();
-        pixels
+            });
+        });
     }
 }
 
@@ -433,37 +452,26 @@ fn trace_shared_eyes(
     common_estimates: bool,
 ) -> (SharedEyes, PassStats) {
     let pixels = (statics.settings.width * statics.settings.height) as usize;
-    let traced: Vec<(EyeRecord, FirstRound, PassStats)> = (0..pixels)
-        .into_par_iter()
-        .with_min_len(64)
-        .map(|pixel| {
-            let (state, start_stats) = start_eye_path(statics, pass, pixel);
-            let start = state.clone();
-            let mut watched = Vec::new();
-            let (end, stats) = continue_eye_path(statics, pass, state, |event| {
-                let (state, ray) = match event {
-                    EyeEvent::Segment(state, t_hit) => (
-                        state,
-                        ShadowRay {
-                            origin: state.origin.into(),
-                            direction: state.direction.into(),
-                            t_max: t_hit,
-                        },
-                    ),
-                    EyeEvent::Shadow(ray) => (&start, ray),
-                };
-                if swept.meets(ray) {
-                    watched.push(Watched { state: state.clone(), ray, stored_before: 0 });
-                }
-            });
-            let direct_watched = end.direct.map(|t| t.ray.is_some_and(|r| swept.meets(r)));
-            let round = end.result.point.map_or(FirstRound::default(), |vp| common_set.first_round(&vp));
-            (EyeRecord { end, watched, direct_watched }, round, start_stats + stats)
-        })
-        .collect();
-    let stats = traced.iter().map(|(_, _, s)| *s).sum();
-    let (records, common_rounds): (Vec<EyeRecord>, Vec<FirstRound>) =
-        traced.into_iter().map(|(record, round, _)| (record, round)).unzip();
+    let (records, stats) = collect_counting(pixels, |pixel| {
+        let (state, start_stats) = start_eye_path(statics, pass, pixel);
+        let start = state.clone();
+        let mut watched = Vec::new();
+        let (end, stats) = continue_eye_path(statics, pass, state, |event| {
+            let (state, ray) = match event {
+                EyeEvent::Segment(state, t_hit) => (
+                    state,
+                    ShadowRay { origin: state.origin.into(), direction: state.direction.into(), t_max: t_hit },
+                ),
+                EyeEvent::Shadow(ray) => (&start, ray),
+            };
+            if swept.meets(ray) {
+                watched.push(Watched { state: state.clone(), ray, stored_before: 0 });
+            }
+        });
+        let direct_watched = end.direct.map(|t| t.ray.is_some_and(|r| swept.meets(r)));
+        let common_round = end.result.point.map_or(FirstRound::default(), |vp| common_set.first_round(&vp));
+        (EyeRecord { end, watched, direct_watched, common_round }, start_stats + stats)
+    });
     let watched = (0..records.len() as u32)
         .filter(|&p| {
             let r = &records[p as usize];
@@ -473,20 +481,21 @@ fn trace_shared_eyes(
     let common = common_estimates.then(|| {
         let estimates = records
             .par_iter()
-            .zip(&common_rounds)
             .with_min_len(64)
-            .map(|(r, &round)| {
+            .map(|r| {
                 let eye = &r.end.result;
-                let sums = eye.point.map_or(PhotonSums::default(), |vp| sum_over(&vp, &[(common_set, round)]));
+                let sums =
+                    eye.point.map_or(PhotonSums::default(), |vp| sum_over(&vp, &[(common_set, r.common_round)]));
                 common_set.estimate(eye, sums)
             })
             .collect();
         (estimates, PointGrid::new(&records, pass.radius))
     });
-    (SharedEyes { records, watched, common_rounds, common }, stats)
+    (SharedEyes { records, watched, common }, stats)
 }
 
 /// How a frame's moving triangles change a shared eye path.
+#[derive(Clone)]
 enum EyeChange {
     /// Not at all.
     Same,
