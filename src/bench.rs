@@ -94,7 +94,7 @@ pub fn run(
     settings.photons = photons;
     let description = load_description(&settings)?;
     let start = Instant::now();
-    let shot = Shot::new(&settings, description)?;
+    let shot = Shot::new(&settings, std::sync::Arc::new(description))?;
     let (scene, accel) = shot.pose(0.0);
     println!(
         "scene {} ({} triangles, {} lights), {}x{}, {} photon paths per pass, passes {}..{}; BVH build {:.3} s",

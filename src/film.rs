@@ -292,7 +292,13 @@ impl Film {
     }
 
     /// Adds `sign` (1 or -1) times pixel `i`'s estimate to its sums (not its pass count).
-    fn add_estimate(&mut self, w: &PassWeights, i: usize, (radiance, laplacian, coverage): Estimate, sign: f64) {
+    fn add_estimate(
+        &mut self,
+        w: &PassWeights,
+        i: usize,
+        (radiance, laplacian, coverage): Estimate,
+        sign: f64,
+    ) {
         // A non-finite estimate would poison the pixel's sums for good: count it as zero and
         // report it, so the image stays usable and the problem is not silent. (A film of
         // differences takes back the common film's count: the sum wraps back.)

@@ -5,8 +5,8 @@
 //! Passes run until `--passes` or `--time-budget` is reached, whichever comes first. Each pass
 //! samples one time in the frame's shutter (DESIGN.md step 1), shared by its eye rays and photons.
 
-use std::ops::Range;
 use std::borrow::Cow;
+use std::ops::Range;
 use std::path::{Path, PathBuf};
 use std::sync::Arc;
 use std::time::{Duration, Instant};
@@ -20,12 +20,14 @@ use crate::progress::Progress;
 pub use crate::progress::ProgressStyle;
 use crate::sampling::pass_time_sample;
 use crate::scene::description::{LensSettings, Shutter};
-use crate::scene::pose::lens;
+use crate::scene::pose::{lens, Motion};
 use crate::scene::{Description, Prepared, Scene, TimeRange, DEFAULT_RADIUS_FRACTION};
 pub use crate::sppm::LightSampling;
 use rayon::prelude::*;
 
-use crate::sppm::{run_shared_pass, Crop, FrameEstimates, PassSamples, PassStats, PixelEstimate, Renderer, SppmSettings};
+use crate::sppm::{
+    run_shared_pass, Crop, FrameEstimates, PassSamples, PassStats, PixelEstimate, Renderer, SppmSettings,
+};
 
 /// Set when the user asks the render to stop (Ctrl-C, SIGTERM): the pass in flight finishes,
 /// frames not yet written are dropped, and the render ends with an error naming what was kept.
@@ -161,11 +163,11 @@ pub struct RenderReport {
     pub frames: Vec<FrameReport>,
     /// Frames skipped by `--resume`.
     pub skipped: Vec<i32>,
-    /// BVHs built over the fixed part (one per range).
+    /// BVHs built over the fixed part (one per span of frames over which the same things move).
     pub fixed_bvh_builds: u64,
     /// Scenes posed at a pass time (zero when nothing moves: one pose serves all).
     pub poses: u64,
-    /// Frames rendered together in a block (pass-major).
+    /// Frames rendered together in a block (pass-major); the longest block's.
     pub block_frames: usize,
     /// Work done once per pass for a whole block (paths shared between its frames).
     pub shared_stats: PassStats,
@@ -341,7 +343,7 @@ pub struct Shot {
 
 impl Shot {
     /// Prepares `description` for the frames and settings of `settings`.
-    pub fn new(settings: &RenderSettings, description: Description) -> Result<Self, String> {
+    pub fn new(settings: &RenderSettings, description: Arc<Description>) -> Result<Self, String> {
         let [full_width, full_height] = resolution(settings, &description);
         check_resolution([full_width, full_height])?;
         let crop = crop(settings.crop, [full_width, full_height])?;
@@ -356,7 +358,7 @@ impl Shot {
             ));
         }
         let lens = lens(lens_settings, description.camera.focal_length_mm);
-        let prepared = Prepared::with_lens(Arc::new(description), range, lens);
+        let prepared = Prepared::with_lens(description, range, lens);
         let fixed_bvh = Arc::new(prepared.fixed_bvh());
         let instanced_bvh = prepared.instanced_bvh();
         let first = prepared.pose(range.start);
@@ -445,19 +447,58 @@ impl Shot {
 /// Frames are rendered pass-major in blocks (DESIGN.md, "Frames, and reuse across frames"): every
 /// frame of a block renders pass 0, then pass 1, and so on, sharing the paths that the static part
 /// of the scene makes alike. The block is as long as the memory budget allows.
+///
+/// Reuse is decided per span of frames over which the same things move (see [`motion_spans`]):
+/// each span is prepared on its own, so an object that moves only in frames 10 to 12 is static
+/// geometry for the frames before and after. Every span renders with the first span's radius.
 pub fn render(settings: &RenderSettings) -> Result<RenderReport, String> {
-    let shot = Shot::new(settings, load_description(settings)?)?;
+    let description = Arc::new(load_description(settings)?);
     std::fs::create_dir_all(&settings.out_dir)
         .map_err(|e| format!("cannot create output folder {}: {e}", settings.out_dir.display()))?;
-    let mut report = RenderReport { fixed_bvh_builds: 1, ..Default::default() };
+    let mut report = RenderReport::default();
     let (skipped, todo): (Vec<i32>, Vec<i32>) =
         settings.frames.iter().partition(|&&f| settings.resume && output_path(settings, f).exists());
     report.skipped = skipped;
-    report.block_frames = shot.block_frames(settings, todo.len());
-    for block in todo.chunks(report.block_frames.max(1)) {
-        render_block(&shot, settings, block, &mut report)?;
+    let mut span_settings = settings.clone();
+    for span in motion_spans(&description, &todo, shutter(settings, &description)) {
+        span_settings.frames = span;
+        let shot = Shot::new(&span_settings, Arc::clone(&description))?;
+        span_settings.radius = Some(shot.sppm.initial_radius);
+        report.fixed_bvh_builds += 1;
+        let block_frames = shot.block_frames(settings, span_settings.frames.len());
+        report.block_frames = report.block_frames.max(block_frames);
+        for block in span_settings.frames.chunks(block_frames) {
+            render_block(&shot, settings, block, &mut report)?;
+        }
     }
     Ok(report)
+}
+
+/// `frames` split, in order, into spans over which the same things move. A span's time is cut
+/// into pieces: its first frame's shutter, then for each next frame the time from the frame
+/// before's shutter closing to its own closing. A frame joins the span before it when its piece
+/// changes what the span's pieces change (a shutter of no length changes nothing and agrees with
+/// anything). So an object that moves only between frames 10 and 12 of 1 to 24 makes spans 1-10,
+/// 11-12 and 13-24, and is static geometry in the first and the last.
+pub fn motion_spans(description: &Description, frames: &[i32], shutter: Shutter) -> Vec<Vec<i32>> {
+    let fps = description.fps;
+    let close = |frame: i32| seconds(frame as f32 + shutter.open + shutter.length, fps);
+    let mut spans: Vec<(Vec<i32>, Option<Motion>)> = Vec::new();
+    for &frame in frames {
+        if let Some((span, moving)) = spans.last_mut() {
+            let (a, b) = (close(span[span.len() - 1]), close(frame));
+            let piece = Motion::within(description, TimeRange { start: a.min(b), end: a.max(b) });
+            if moving.as_ref().is_none_or(|m| *m == piece) {
+                span.push(frame);
+                *moving = Some(piece);
+                continue;
+            }
+        }
+        let own = (shutter.length > 0.0)
+            .then(|| Motion::within(description, time_range(&[frame], shutter, description.fps)));
+        spans.push((vec![frame], own));
+    }
+    spans.into_iter().map(|(span, _)| span).collect()
 }
 
 impl Shot {
@@ -605,7 +646,9 @@ fn render_block(
         let mut target_met = Vec::with_capacity(active.len());
         for frame in &mut active {
             let met = match frame.monitor.measures_after(done) {
-                true => frame.monitor.after_pass(&whole_film(&frame.film, &common), frame.elapsed_s, photons)?,
+                true => {
+                    frame.monitor.after_pass(&whole_film(&frame.film, &common), frame.elapsed_s, photons)?
+                }
                 false => false,
             };
             target_met.push(met);
@@ -802,8 +845,14 @@ fn write_output(
     let path = output_path(settings, frame);
     match (&settings.partial_passes, &shot.identity) {
         (Some(passes), Some((sha256, fingerprint))) => {
-            let header =
-                partial::header(&settings.scene, sha256.clone(), fingerprint.clone(), frame, passes.clone(), film);
+            let header = partial::header(
+                &settings.scene,
+                sha256.clone(),
+                fingerprint.clone(),
+                frame,
+                passes.clone(),
+                film,
+            );
             partial::write(&path, &header, film)?;
         }
         _ => write_frame(film, errors, &path)?,

@@ -45,7 +45,7 @@ pub fn report(settings: &RenderSettings) -> Result<Value, String> {
         }
     }
     let animated = animated_values(&description);
-    let shot = Shot::new(settings, description)?;
+    let shot = Shot::new(settings, std::sync::Arc::new(description))?;
     let prepared = shot.prepared();
     let (fixed, moving) = prepared.triangle_counts();
     let instanced = prepared.instanced_triangles();

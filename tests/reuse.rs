@@ -170,6 +170,47 @@ fn a_deforming_mesh_renders_each_frame_as_alone() {
     assert!(block > 1, "the still floor is shared: frames render together");
 }
 
+/// A floor under a point light, with a red ball that rests at x = -1 until frame 4, rolls to
+/// x = +1 by frame 7 and rests there.
+fn rolling_ball_scene(dir: &Path) -> PathBuf {
+    let mut gltf = GltfBuilder::default();
+    let white = gltf.material(diffuse([0.8, 0.8, 0.8]));
+    let red = gltf.material(diffuse([0.8, 0.1, 0.1]));
+    gltf.quad_y("Floor", 0.0, 6.0, true, white);
+    gltf.sphere("Ball", [0.0, 0.0, 0.0], 0.5, 24, red);
+    let ball = gltf.last_node();
+    let keys = [vec![-1.0, 0.5, 0.0], vec![1.0, 0.5, 0.0]];
+    gltf.animate(ball, "translation", &[4.0 / 24.0, 7.0 / 24.0], &keys, "LINEAR");
+    gltf.light(
+        json!({"type": "point", "intensity": 4.0 * std::f32::consts::PI * 683.0}),
+        [0.0, 4.0, 0.0],
+        [0.0, -1.0, 0.0],
+    );
+    gltf.camera_with_aspect([0.0, 5.0, 6.0], [0.0, -5.0, -6.0], 0.6, 1.0);
+    gltf.scene_extras(json!({"fps": 24.0}));
+    gltf.write(dir, "rolling_ball")
+}
+
+/// Reuse is decided per span of frames over which the same things move: the ball rolling only
+/// between frames 4 and 7 is static geometry in frames 1-4 and 8-10 (those spans are never
+/// posed), and every frame still renders as it does alone.
+#[test]
+fn an_object_moving_mid_range_is_static_before_and_after() {
+    let dir = tempfile::tempdir().unwrap();
+    let scene = rolling_ball_scene(dir.path());
+    let frames: Vec<i32> = (1..=10).collect();
+    let block = assert_reuse_renders_each_frame_alone(&scene, &frames, [48, 48]);
+    assert_eq!(block, 4, "the longest span, frames 1-4, renders together");
+    let mut s = settings(&scene, &dir.path().join("spans"), 2);
+    (s.frames, s.resolution) = (frames, Some([16, 16]));
+    let report = render_frames(&s, 2);
+    assert_eq!(report.fixed_bvh_builds, 3, "spans 1-4, 5-7 and 8-10");
+    assert_eq!(report.poses, 3, "only the frames where the ball rolls are posed");
+    let still = |f: i32| read_exr(&frames::frame_path(&s.out_dir, f)).rgb;
+    assert!(still(1) == still(4) && still(8) == still(10), "frames where nothing moves are alike");
+    assert!(still(1) != still(8), "the ball has moved");
+}
+
 /// A white floor lit by a point light of 4 pi W/sr 4 above the origin (floor radiance
 /// 16 / d^3 at distance d), with a glass ball (radius 0.5, centre 1 above the floor) that jumps
 /// from x = -1.2 in frame 1 to x = +1.2 in frame 2, seen from above at an angle.

@@ -179,16 +179,67 @@ fn punctual(light: &PunctualLight, rig: &Rig, time: f32) -> Light {
 
 /// The indices of the materials whose animated values change within `range`, and every
 /// material at the range's start.
-fn materials_over(description: &Description, range: TimeRange) -> (Vec<usize>, Vec<Material>) {
+fn materials_at_start(description: &Description, range: TimeRange) -> Vec<Material> {
     let mut materials = description.materials.clone();
-    let mut varying = Vec::new();
     for (m, animation) in &description.material_animations {
         animation.apply(&mut materials[*m], range.start);
-        if animation.tracks.vary_within(range.start, range.end) {
-            varying.push(*m);
+    }
+    materials
+}
+
+/// The indices below `count` that `listed` (in order) does not hold, in order.
+fn others(listed: &[usize], count: usize) -> Vec<usize> {
+    (0..count).filter(|i| listed.binary_search(i).is_err()).collect()
+}
+
+/// What changes within a time range: the meshes that move, deform or take a changing material,
+/// the lights that move or change, the materials that change, and the camera.
+#[derive(Clone, Debug, PartialEq)]
+pub struct Motion {
+    /// Meshes (by index) that move, deform or take a changing material.
+    pub meshes: Vec<usize>,
+    /// Punctual lights (by index) that move or change.
+    pub lights: Vec<usize>,
+    /// Materials (by index) whose animated values change.
+    pub materials: Vec<usize>,
+    /// The camera moves or zooms.
+    pub camera: bool,
+}
+
+impl Motion {
+    /// What changes in `description` within `range`.
+    pub fn within(description: &Description, range: TimeRange) -> Self {
+        let rig = &description.rig;
+        let moves = |node: usize| rig.moves_within(node, range.start, range.end);
+        let materials: Vec<usize> = description
+            .material_animations
+            .iter()
+            .filter(|(_, animation)| animation.tracks.vary_within(range.start, range.end))
+            .map(|(m, _)| *m)
+            .collect();
+        let mut material_varies = vec![false; description.materials.len()];
+        materials.iter().for_each(|&m| material_varies[m] = true);
+        let mesh_changes = |mesh: &MeshInstance| {
+            let changes = |d: &Deformation| d.changes_within(rig, mesh.node, range.start, range.end);
+            let varying_material = mesh.triangles.iter().any(|t| material_varies[t.material as usize]);
+            moves(mesh.node) || mesh.deformation.as_deref().is_some_and(changes) || varying_material
+        };
+        let light_changes = |light: &PunctualLight| {
+            let animated =
+                light.animation.as_ref().is_some_and(|a| a.tracks.vary_within(range.start, range.end));
+            moves(light.node) || animated
+        };
+        let camera = &description.camera;
+        let zooms = camera.animation.as_ref().is_some_and(|a| a.tracks.vary_within(range.start, range.end));
+        Motion {
+            meshes: (0..description.meshes.len()).filter(|&m| mesh_changes(&description.meshes[m])).collect(),
+            lights: (0..description.lights.len())
+                .filter(|&l| light_changes(&description.lights[l]))
+                .collect(),
+            camera: moves(camera.node) || zooms,
+            materials,
         }
     }
-    (varying, materials)
 }
 
 /// Every material with its emission at its peak, if any emission is animated.
@@ -264,25 +315,12 @@ impl Prepared {
     /// Builds the fixed part of `description` for `range`, with `lens` on the camera.
     pub fn with_lens(description: Arc<Description>, range: TimeRange, lens: Option<Lens>) -> Self {
         let rig = &description.rig;
-        let moves = |node: usize| rig.moves_within(node, range.start, range.end);
-        let mesh_moves = |mesh: &MeshInstance| {
-            let changes = |d: &Deformation| d.changes_within(rig, mesh.node, range.start, range.end);
-            moves(mesh.node) || mesh.deformation.as_deref().is_some_and(changes)
-        };
-        let (varying_materials, materials) = materials_over(&description, range);
-        let mut material_varies = vec![false; description.materials.len()];
-        varying_materials.iter().for_each(|&m| material_varies[m] = true);
-        let varying_material =
-            |mesh: &MeshInstance| mesh.triangles.iter().any(|t| material_varies[t.material as usize]);
-        let (moving_meshes, fixed_meshes): (Vec<usize>, Vec<usize>) = (0..description.meshes.len())
-            .partition(|&m| mesh_moves(&description.meshes[m]) || varying_material(&description.meshes[m]));
-        let light_moves = |light: &PunctualLight| {
-            let animated =
-                light.animation.as_ref().is_some_and(|a| a.tracks.vary_within(range.start, range.end));
-            moves(light.node) || animated
-        };
-        let (moving_lights, fixed_punctual): (Vec<usize>, Vec<usize>) =
-            (0..description.lights.len()).partition(|&l| light_moves(&description.lights[l]));
+        let motion = Motion::within(&description, range);
+        let materials = materials_at_start(&description, range);
+        let (varying_materials, moving_meshes, moving_lights) =
+            (motion.materials, motion.meshes, motion.lights);
+        let fixed_meshes = others(&moving_meshes, description.meshes.len());
+        let fixed_punctual = others(&moving_lights, description.lights.len());
         let fixed = flatten_at(&description, &fixed_meshes, range.start);
         let mut fixed_lights: Vec<Light> =
             fixed_punctual.iter().map(|&l| punctual(&description.lights[l], rig, range.start)).collect();
@@ -303,10 +341,8 @@ impl Prepared {
         fixed_lights.extend(emitters);
         let open_edges = Arc::new(OpenEdges::of(&fixed, sphere.radius * DEFAULT_RADIUS_FRACTION as f32));
         let moving_open_sides = OpenSides::of(&flatten_at(&description, &moving_meshes, range.start));
-        let camera = &description.camera;
-        let zooms = camera.animation.as_ref().is_some_and(|a| a.tracks.vary_within(range.start, range.end));
         Prepared {
-            camera_moves: moves(camera.node) || zooms,
+            camera_moves: motion.camera,
             materials: Arc::new(materials),
             varying_materials,
             description,

@@ -460,7 +460,11 @@ fn trace_shared_eyes(
             let (state, ray) = match event {
                 EyeEvent::Segment(state, t_hit) => (
                     state,
-                    ShadowRay { origin: state.origin.into(), direction: state.direction.into(), t_max: t_hit },
+                    ShadowRay {
+                        origin: state.origin.into(),
+                        direction: state.direction.into(),
+                        t_max: t_hit,
+                    },
                 ),
                 EyeEvent::Shadow(ray) => (&start, ray),
             };
@@ -484,8 +488,9 @@ fn trace_shared_eyes(
             .with_min_len(64)
             .map(|r| {
                 let eye = &r.end.result;
-                let sums =
-                    eye.point.map_or(PhotonSums::default(), |vp| sum_over(&vp, &[(common_set, r.common_round)]));
+                let sums = eye
+                    .point
+                    .map_or(PhotonSums::default(), |vp| sum_over(&vp, &[(common_set, r.common_round)]));
                 common_set.estimate(eye, sums)
             })
             .collect();
