@@ -179,7 +179,25 @@ impl PhotonSet {
     /// A pixel's estimate from its eye result and the photon sums at its visible point (of this
     /// set, or of several sets of the same radius added up), cut by the scene's open edges near
     /// the point (looked up once for the sum).
-    pub fn estimate(&self, eye: &EyeResult, mut sums: PhotonSums) -> PixelEstimate {
+    pub fn estimate(&self, eye: &EyeResult, sums: PhotonSums) -> PixelEstimate {
+        self.estimate_cut(eye, sums, |vp| self.edge_cut(vp))
+    }
+
+    /// The kernel mass the scene's open edges near `vp` cut off its disc, per axis.
+    pub fn edge_cut(&self, vp: &VisiblePoint) -> Vec3 {
+        let radius = self.kernel.r2.sqrt();
+        let edges = self.open_edges.distances(vp.p, vp.frame.ng(), radius);
+        edges.map(|d| kernel_mass_beyond(d / radius))
+    }
+
+    /// [`PhotonSet::estimate`] with the open edges' cut given by `edge_cut` (asked only where
+    /// photons were found).
+    pub fn estimate_cut(
+        &self,
+        eye: &EyeResult,
+        mut sums: PhotonSums,
+        edge_cut: impl FnOnce(&VisiblePoint) -> Vec3,
+    ) -> PixelEstimate {
         let Some(vp) = eye.point else {
             return PixelEstimate {
                 radiance: eye.radiance,
@@ -188,9 +206,7 @@ impl PhotonSet {
             };
         };
         if sums.kernel != SampledSpectrum::ZERO {
-            let radius = self.kernel.r2.sqrt();
-            let edges = self.open_edges.distances(vp.p, vp.frame.ng(), radius);
-            sums.cut = sums.cut.max(edges.map(|d| kernel_mass_beyond(d / radius)));
+            sums.cut = sums.cut.max(edge_cut(&vp));
         }
         PixelEstimate {
             radiance: eye.radiance + vp.beta * sums.kernel / sums.kernel_mass_within(),

@@ -101,6 +101,8 @@ struct EyeRecord {
     direct_watched: [bool; 2],
     /// Its first round over the common photons.
     common_round: FirstRound,
+    /// The open edges' cut of its visible point's disc, where the common photons asked for it.
+    edge_cut: Option<Vec3>,
 }
 
 /// What [`run_shared_pass`] hands each frame: its pixel estimates and the work it did itself.
@@ -182,7 +184,7 @@ pub fn run_shared_pass(
                     let pixels = eyes.records.len();
                     let (estimates, s) = collect_counting(pixels, |pixel| {
                         let (change, s) = frame_eye(frame, pass, &eyes.records[pixel]);
-                        (sets.estimate(eyes, pixel, change), s)
+                        (sets.estimate(eyes, pixel, &change), s)
                     });
                     (FrameEstimates::Every(estimates), s)
                 }
@@ -211,23 +213,24 @@ struct GatherSets<'a> {
 
 impl GatherSets<'_> {
     /// The estimate of pixel `pixel` of a shared eye pass, as its path changed in the frame.
-    fn estimate(self, eyes: &SharedEyes, pixel: usize, change: EyeChange) -> PixelEstimate {
-        let shared = || eyes.records[pixel].end.result;
+    fn estimate(self, eyes: &SharedEyes, pixel: usize, change: &EyeChange) -> PixelEstimate {
+        let record = &eyes.records[pixel];
         match change {
-            EyeChange::Same => self.estimate_with(&shared(), Some(eyes.records[pixel].common_round)),
-            EyeChange::Direct(eye) => self.estimate_with(&eye, Some(eyes.records[pixel].common_round)),
-            EyeChange::Resumed(eye) => self.estimate_with(&eye, None),
+            EyeChange::Same => self.estimate_with(&record.end.result, Some(record)),
+            EyeChange::Direct(eye) => self.estimate_with(eye, Some(record)),
+            EyeChange::Resumed(eye) => self.estimate_with(eye, None),
         }
     }
 
-    /// The estimate of an eye path whose first round over the common photons is `common_round`
-    /// (found here when `None`).
-    fn estimate_with(self, eye: &EyeResult, common_round: Option<FirstRound>) -> PixelEstimate {
+    /// The estimate of an eye path, whose visible point is that of `shared` when given (its
+    /// first round over the common photons and its edges' cut are then known).
+    fn estimate_with(self, eye: &EyeResult, shared: Option<&EyeRecord>) -> PixelEstimate {
         let sums = eye.point.map_or(PhotonSums::default(), |vp| {
-            let common_round = common_round.unwrap_or_else(|| self.common.first_round(&vp));
+            let common_round = shared.map_or_else(|| self.common.first_round(&vp), |r| r.common_round);
             sum_over(&vp, &[(self.common, common_round), (self.own, self.own.first_round(&vp))])
         });
-        self.own.estimate(eye, sums)
+        let edge_cut = shared.and_then(|r| r.edge_cut);
+        self.own.estimate_cut(eye, sums, |vp| edge_cut.unwrap_or_else(|| self.own.edge_cut(vp)))
     }
 }
 
@@ -253,8 +256,8 @@ fn differing_estimates(
     }
     points.mark_near(own, &marks);
     let change = |pixel: u32| match eyes.watched.binary_search(&pixel) {
-        Ok(i) => changes[i].clone(),
-        Err(_) => EyeChange::Same,
+        Ok(i) => &changes[i],
+        Err(_) => &EyeChange::Same,
     };
     let estimates = marks
         .marked()
@@ -452,7 +455,7 @@ fn trace_shared_eyes(
     common_estimates: bool,
 ) -> (SharedEyes, PassStats) {
     let pixels = (statics.settings.width * statics.settings.height) as usize;
-    let (records, stats) = collect_counting(pixels, |pixel| {
+    let (mut records, stats) = collect_counting(pixels, |pixel| {
         let (state, start_stats) = start_eye_path(statics, pass, pixel);
         let start = state.clone();
         let mut watched = Vec::new();
@@ -474,7 +477,8 @@ fn trace_shared_eyes(
         });
         let direct_watched = end.direct.map(|t| t.ray.is_some_and(|r| swept.meets(r)));
         let common_round = end.result.point.map_or(FirstRound::default(), |vp| common_set.first_round(&vp));
-        (EyeRecord { end, watched, direct_watched, common_round }, start_stats + stats)
+        let record = EyeRecord { end, watched, direct_watched, common_round, edge_cut: None };
+        (record, start_stats + stats)
     });
     let watched = (0..records.len() as u32)
         .filter(|&p| {
@@ -484,14 +488,14 @@ fn trace_shared_eyes(
         .collect();
     let common = common_estimates.then(|| {
         let estimates = records
-            .par_iter()
+            .par_iter_mut()
             .with_min_len(64)
             .map(|r| {
                 let eye = &r.end.result;
                 let sums = eye
                     .point
                     .map_or(PhotonSums::default(), |vp| sum_over(&vp, &[(common_set, r.common_round)]));
-                common_set.estimate(eye, sums)
+                common_set.estimate_cut(eye, sums, |vp| *r.edge_cut.insert(common_set.edge_cut(vp)))
             })
             .collect();
         (estimates, PointGrid::new(&records, pass.radius))
@@ -500,7 +504,6 @@ fn trace_shared_eyes(
 }
 
 /// How a frame's moving triangles change a shared eye path.
-#[derive(Clone)]
 enum EyeChange {
     /// Not at all.
     Same,
