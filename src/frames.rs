@@ -518,7 +518,7 @@ impl Shot {
         let guides = if settings.denoising_passes { GUIDE_SUMS } else { 0 };
         let per_frame = pixels * (FRAME_BYTES_PER_PIXEL + 8 * (settings.spectral_bins + guides) as u64);
         let photons = self.sppm.photons_per_pass as u64 * PHOTON_BYTES_PER_PATH;
-        let shared = pixels * BYTES_PER_PIXEL + photons;
+        let shared = pixels * (BYTES_PER_PIXEL + SHARED_BYTES_PER_PIXEL) + photons;
         let fit = settings.memory_budget.saturating_sub(shared) / per_frame.max(1);
         (fit as usize).clamp(1, frames)
     }
@@ -526,6 +526,11 @@ impl Shot {
 
 /// What a frame keeps while its block renders: its sums, its error monitor, its work counts.
 const FRAME_BYTES_PER_PIXEL: u64 = 96;
+
+/// What a block holds per pixel for its frames together: a shared eye path with its common
+/// gather (496 bytes), its common estimate (48), its visible point bucketed (24) and the common
+/// film (64); generously.
+const SHARED_BYTES_PER_PIXEL: u64 = 704;
 
 /// What one pass holds per photon path (its photons and the segments frames check), generously.
 const PHOTON_BYTES_PER_PATH: u64 = 256;
@@ -797,7 +802,10 @@ fn finish_frames(
 ) -> Result<(), String> {
     let mut finished = Vec::with_capacity(stopped.len());
     for (mut frame, stopped_by) in stopped {
-        let film = whole_film(&frame.film, common).into_owned();
+        let mut film = std::mem::replace(&mut frame.film, Film::new(0, 0, FilmMode::Spectral, 0, false));
+        if let Some(common) = common {
+            film.add(common);
+        }
         let errors = frame.monitor.finish(&film, frame.elapsed_s, photons, stopped_by)?;
         if film.non_finite_estimates > 0 {
             eprintln!(
