@@ -13,7 +13,11 @@
 //!
 //! Eye paths are shared the same way when the camera and the lights stand still; otherwise each
 //! frame traces its own (photons are still shared). Photon paths from moving lights are traced
-//! per frame.
+//! per frame. With shared eye paths, every pixel's estimate from the common photons alone is
+//! made once per pass ([`FrameEstimates::Beside`]), and a frame estimates only the pixels where
+//! it differs: those whose eye path its moving triangles change, and those whose visible point
+//! lies within the radius of one of its own photons (found from the photons, through a grid of
+//! the visible points). Every other pixel's estimate is the common one, bit for bit.
 
 use std::ops::Range;
 use std::sync::atomic::{AtomicU64, Ordering};
