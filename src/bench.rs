@@ -16,11 +16,18 @@ fn rays(stats: PassStats) -> u64 {
     stats.eye_rays + stats.shadow_rays + stats.photon_rays
 }
 
-/// Renders `frames` of `scene` with and without reuse across frames, `passes` passes each, and
-/// prints wall time, rays per frame and peak memory for both, and the speed-up.
-pub fn run_frames(scene: &Path, frames: Vec<i32>, passes: u64) -> Result<(), String> {
+/// Renders `frames` of `scene` (at `resolution`, else the scene's) with and without reuse across
+/// frames, `passes` passes each, and prints wall time, rays per frame and peak memory for both,
+/// and the speed-up.
+pub fn run_frames(
+    scene: &Path,
+    frames: Vec<i32>,
+    passes: u64,
+    resolution: Option<[u32; 2]>,
+) -> Result<(), String> {
     let out = std::env::temp_dir().join(format!("caustic-bench-{}", std::process::id()));
     let mut settings = RenderSettings::new(scene, &out);
+    settings.resolution = resolution;
     settings.frames = frames;
     settings.passes = Some(passes);
     let count = settings.frames.len() as f64;

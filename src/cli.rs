@@ -192,9 +192,9 @@ pub struct RenderArgs {
 pub struct BenchArgs {
     /// The scene (default: the demo scene).
     scene: Option<PathBuf>,
-    /// Image size WxH.
-    #[arg(long, default_value = "640x360", value_parser = parse_resolution)]
-    resolution: [u32; 2],
+    /// Image size WxH (default 640x360; with --frames, the scene's).
+    #[arg(long, value_parser = parse_resolution)]
+    resolution: Option<[u32; 2]>,
     /// Passes per measurement.
     #[arg(long, default_value_t = 8, value_parser = at_least_one)]
     passes: u64,
@@ -410,12 +410,12 @@ pub fn run(cli: Cli) -> Result<(), String> {
         Command::Bench(args) => {
             let scene = args.scene.unwrap_or_else(|| PathBuf::from(DEMO_SCENE));
             match args.frames {
-                Some(frames) => crate::bench::run_frames(&scene, frames.0, args.passes),
+                Some(frames) => crate::bench::run_frames(&scene, frames.0, args.passes, args.resolution),
                 None => {
                     let photons = args.photons.map(|n| n as usize);
                     crate::bench::run(
                         &scene,
-                        args.resolution,
+                        args.resolution.unwrap_or(BENCH_RESOLUTION),
                         args.first_pass..args.first_pass + args.passes,
                         photons,
                     )
@@ -424,6 +424,9 @@ pub fn run(cli: Cli) -> Result<(), String> {
         }
     }
 }
+
+/// `caustic bench`'s image size when none is given (one frame).
+const BENCH_RESOLUTION: [u32; 2] = [640, 360];
 
 /// The program: parse, run, and exit non-zero with one message on failure.
 pub fn main() -> std::process::ExitCode {
