@@ -791,55 +791,71 @@ fn stop_reason(
 }
 
 /// Writes the EXRs of frames stopped after the same pass (with their error passes, after
-/// `photons` photon paths; several at once), announces them and reports them in order.
+/// `photons` photon paths; as many at once as there are threads), announces them and reports
+/// them in order.
 fn finish_frames(
     shot: &Shot,
     settings: &RenderSettings,
-    stopped: Vec<(FrameInProgress, StopReason)>,
+    mut stopped: Vec<(FrameInProgress, StopReason)>,
     common: &Option<Film>,
     photons: u64,
     report: &mut RenderReport,
 ) -> Result<(), String> {
-    let mut finished = Vec::with_capacity(stopped.len());
-    for (mut frame, stopped_by) in stopped {
-        let mut film = std::mem::replace(&mut frame.film, Film::new(0, 0, FilmMode::Spectral, 0, false));
-        if let Some(common) = common {
-            film.add(common);
+    while !stopped.is_empty() {
+        let rest = stopped.split_off(stopped.len().min(rayon::current_num_threads()));
+        let mut finished = Vec::with_capacity(stopped.len());
+        for (mut frame, stopped_by) in std::mem::replace(&mut stopped, rest) {
+            let mut film = std::mem::replace(&mut frame.film, Film::new(0, 0, FilmMode::Spectral, 0, false));
+            if let Some(common) = common {
+                film.add(common);
+            }
+            let errors = frame.monitor.finish(&film, frame.elapsed_s, photons, stopped_by)?;
+            if film.non_finite_estimates > 0 {
+                eprintln!(
+                    "caustic: warning: frame {}: {} pixel estimates were NaN or infinite and counted as zero (please report this scene)",
+                    frame.frame, film.non_finite_estimates
+                );
+            }
+            finished.push((frame, stopped_by, film, errors));
         }
-        let errors = frame.monitor.finish(&film, frame.elapsed_s, photons, stopped_by)?;
-        if film.non_finite_estimates > 0 {
-            eprintln!(
-                "caustic: warning: frame {}: {} pixel estimates were NaN or infinite and counted as zero (please report this scene)",
-                frame.frame, film.non_finite_estimates
-            );
+        let written: Vec<Result<PathBuf, String>> = finished
+            .par_iter()
+            .map(|(frame, _, film, errors)| write_output(shot, settings, frame.frame, film, errors))
+            .collect();
+        for ((frame, stopped_by, film, errors), path) in finished.into_iter().zip(written) {
+            announce(settings, frame, stopped_by, &film, &errors, path?, report);
         }
-        finished.push((frame, stopped_by, film, errors));
-    }
-    let written: Vec<Result<PathBuf, String>> = finished
-        .par_iter()
-        .map(|(frame, _, film, errors)| write_output(shot, settings, frame.frame, film, errors))
-        .collect();
-    for ((frame, stopped_by, film, errors), path) in finished.into_iter().zip(written) {
-        let path = path?;
-        Progress::written(
-            settings.progress,
-            frame.frame,
-            &path,
-            film.passes,
-            frame.elapsed_s,
-            stopped_by.as_str(),
-        );
-        report.frames.push(FrameReport {
-            frame: frame.frame,
-            path,
-            passes: film.passes,
-            elapsed_s: frame.elapsed_s,
-            stats: frame.stats,
-            stopped_by,
-            error: summarize(&errors),
-        });
     }
     Ok(())
+}
+
+/// Announces a written frame and adds it to the report.
+fn announce(
+    settings: &RenderSettings,
+    frame: FrameInProgress,
+    stopped_by: StopReason,
+    film: &Film,
+    errors: &[PixelError],
+    path: PathBuf,
+    report: &mut RenderReport,
+) {
+    Progress::written(
+        settings.progress,
+        frame.frame,
+        &path,
+        film.passes,
+        frame.elapsed_s,
+        stopped_by.as_str(),
+    );
+    report.frames.push(FrameReport {
+        frame: frame.frame,
+        path,
+        passes: film.passes,
+        elapsed_s: frame.elapsed_s,
+        stats: frame.stats,
+        stopped_by,
+        error: summarize(errors),
+    });
 }
 
 /// Writes a frame's EXR, or its partial result; gives its path.
