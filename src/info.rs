@@ -3,7 +3,7 @@
 
 use serde_json::{json, Value};
 
-use crate::frames::{load_description, RenderSettings, Shot};
+use crate::frames::{load_description, motion_spans, shutter, RenderSettings, Shot};
 use crate::materials::Material;
 use crate::scene::description::Description;
 
@@ -45,6 +45,7 @@ pub fn report(settings: &RenderSettings) -> Result<Value, String> {
         }
     }
     let animated = animated_values(&description);
+    let spans = motion_spans(&description, &settings.frames, shutter(settings, &description));
     let shot = Shot::new(settings, std::sync::Arc::new(description))?;
     let prepared = shot.prepared();
     let (fixed, moving) = prepared.triangle_counts();
@@ -97,6 +98,7 @@ pub fn report(settings: &RenderSettings) -> Result<Value, String> {
         "shutter_frames": shutter.length,
         "needs": needs,
         "reuse_shares": reuse_shares,
+        "spans": spans,
         "triangles": {"static": fixed, "moving": moving, "instanced": instanced.0, "instanced_stored": instanced.1},
         "deforming": deforming,
         "animated": animated,

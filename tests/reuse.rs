@@ -205,6 +205,8 @@ fn an_object_moving_mid_range_is_static_before_and_after() {
     (s.frames, s.resolution) = (frames, Some([16, 16]));
     let report = render_frames(&s, 2);
     assert_eq!(report.fixed_bvh_builds, 3, "spans 1-4, 5-7 and 8-10");
+    let info = caustic::info::report(&s).unwrap();
+    assert_eq!(info["spans"], json!([[1, 2, 3, 4], [5, 6, 7], [8, 9, 10]]), "caustic info names the spans");
     assert_eq!(report.poses, 3, "only the frames where the ball rolls are posed");
     let still = |f: i32| read_exr(&frames::frame_path(&s.out_dir, f)).rgb;
     assert!(still(1) == still(4) && still(8) == still(10), "frames where nothing moves are alike");

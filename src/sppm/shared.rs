@@ -13,11 +13,13 @@
 //!
 //! Eye paths are shared the same way when the camera and the lights stand still; otherwise each
 //! frame traces its own (photons are still shared). Photon paths from moving lights are traced
-//! per frame. With shared eye paths, every pixel's estimate from the common photons alone is
-//! made once per pass ([`FrameEstimates::Beside`]), and a frame estimates only the pixels where
-//! it differs: those whose eye path its moving triangles change, and those whose visible point
-//! lies within the radius of one of its own photons (found from the photons, through a grid of
-//! the visible points). Every other pixel's estimate is the common one, bit for bit.
+//! per frame. With shared eye paths, every pixel's estimate from all the shared photons (as if no
+//! frame blocked any path) is made once per pass ([`FrameEstimates::Beside`]), and a frame
+//! estimates only the pixels where it differs: those whose eye path its moving triangles change,
+//! and those whose visible point lies within the radius of a photon it changes (a shared one its
+//! moving triangles block, or one of the paths it resumed; found from the photons, through a grid
+//! of the visible points). Elsewhere the frame has the same photons within the radius as all the
+//! shared ones, so the common estimate is its own, up to the order of the sum.
 
 use std::ops::Range;
 use std::sync::atomic::{AtomicU64, Ordering};
@@ -124,13 +126,14 @@ pub enum FrameEstimates<'a> {
     /// Every pixel's, row-major.
     Every(Vec<PixelEstimate>),
     /// Where the frame differs from the block's common estimates. Every other pixel's estimate
-    /// is the common one, bit for bit.
+    /// is the common one (the same photons within its radius, summed in another order).
     Beside {
-        /// Every pixel's estimate from the shared eye paths and the photons every frame keeps
-        /// (the same slice for every frame of the pass).
+        /// Every pixel's estimate from the shared eye paths and every shared photon, as if no
+        /// frame's moving triangles blocked any path (the same slice for every frame of the pass).
         common: &'a [PixelEstimate],
-        /// The frame's own estimates at the pixels where its eye path changed or its own
-        /// photons reach the visible point, in pixel order.
+        /// The frame's own estimates at the pixels where its eye path changed, or where a shared
+        /// photon it does not keep or a photon it traced itself reaches the visible point, in
+        /// pixel order.
         differing: Vec<(u32, PixelEstimate)>,
     },
 }
@@ -167,9 +170,12 @@ pub fn run_shared_pass(
         .collect();
     let common = common_photons(&shared, &always_valid);
     let common_set = PhotonSet::new(&common, pass.radius, &statics.scene.open_edges);
+    let unstable_set =
+        PhotonSet::new(&unstable_photons(&shared, &always_valid), pass.radius, &statics.scene.open_edges);
     let same_edges = frames.iter().all(|f| Arc::ptr_eq(&f.scene.open_edges, &statics.scene.open_edges));
     let eyes = share_eyes.then(|| {
-        let (eyes, eye_stats) = trace_shared_eyes(statics, pass, swept, &common_set, same_edges);
+        let (eyes, eye_stats) =
+            trace_shared_eyes(statics, pass, swept, [&common_set, &unstable_set], same_edges);
         stats = stats + eye_stats;
         eyes
     });
@@ -181,7 +187,8 @@ pub fn run_shared_pass(
         let (estimates, eye_stats) = match &eyes {
             Some(eyes) => match &eyes.common {
                 Some((common, points)) => {
-                    let (differing, s) = differing_estimates(frame, pass, eyes, points, sets, &own);
+                    let changed = changed_photons(&shared, photons);
+                    let (differing, s) = differing_estimates(frame, pass, eyes, points, sets, &changed);
                     (FrameEstimates::Beside { common, differing }, s)
                 }
                 None => {
@@ -239,15 +246,15 @@ impl GatherSets<'_> {
 }
 
 /// A frame's estimates at the pixels where they differ from the common ones: those whose
-/// watched path its moving triangles change, and those whose visible point its `own` photons
-/// reach, in pixel order.
+/// watched path its moving triangles change, and those whose visible point its `changed`
+/// photons reach, in pixel order.
 fn differing_estimates(
     frame: &Renderer,
     pass: &PassSamples,
     eyes: &SharedEyes,
     points: &PointGrid,
     sets: GatherSets,
-    own: &[Photon],
+    changed: &[Photon],
 ) -> (Vec<(u32, PixelEstimate)>, PassStats) {
     let (changes, stats) = collect_counting(eyes.watched.len(), |i| {
         frame_eye(frame, pass, &eyes.records[eyes.watched[i] as usize])
@@ -258,7 +265,7 @@ fn differing_estimates(
             marks.mark(pixel);
         }
     }
-    points.mark_near(own, &marks);
+    points.mark_near(changed, &marks);
     let change = |pixel: u32| match eyes.watched.binary_search(&pixel) {
         Ok(i) => &changes[i],
         Err(_) => &EyeChange::Same,
@@ -439,23 +446,45 @@ fn common_photons(shared: &SharedPhotons, always_valid: &[usize]) -> Vec<Photon>
 /// A frame's photons beyond the common ones: shared photons it keeps that some other frame
 /// does not, and the photons of the paths it traced itself.
 fn own_photons(shared: &SharedPhotons, always_valid: &[usize], frame: &FramePhotons) -> Vec<Photon> {
-    let mut own = Vec::new();
+    record_photons(shared, |r, _| always_valid[r]..frame.valid[r], |r| &frame.own[r])
+}
+
+/// The shared photons some frame of the block does not keep.
+fn unstable_photons(shared: &SharedPhotons, always_valid: &[usize]) -> Vec<Photon> {
+    record_photons(shared, |r, record| always_valid[r]..record.photons.len(), |_| &[])
+}
+
+/// Where a frame's photons differ from all the shared ones: the shared photons it does not
+/// keep, and the photons of the paths it traced itself.
+fn changed_photons(shared: &SharedPhotons, frame: &FramePhotons) -> Vec<Photon> {
+    record_photons(shared, |r, record| frame.valid[r]..record.photons.len(), |r| &frame.own[r])
+}
+
+/// For each record `r` of a path some frame may change, its shared photons `kept(r)` (counted
+/// along the path), then `traced(r)`.
+fn record_photons<'a>(
+    shared: &SharedPhotons,
+    kept: impl Fn(usize, &PathRecord) -> Range<usize>,
+    traced: impl Fn(usize) -> &'a [Photon],
+) -> Vec<Photon> {
+    let mut photons = Vec::new();
     for (r, record) in shared.records.iter().enumerate() {
-        let start = record.photons.start;
-        own.extend_from_slice(&shared.photons[start + always_valid[r]..start + frame.valid[r]]);
-        own.extend_from_slice(&frame.own[r]);
+        let Range { start, end } = kept(r, record);
+        photons.extend_from_slice(&shared.photons[record.photons.start + start..record.photons.start + end]);
+        photons.extend_from_slice(traced(r));
     }
-    own
+    photons
 }
 
 /// Traces every pixel's eye path against the static triangles, keeping what the frames check,
 /// and gathers the common photons at each; with `common estimates`, finishes every pixel's
-/// estimate from them alone and buckets the visible points.
+/// estimate from all the shared photons (the common and the `unstable` ones, which some frame
+/// does not keep) and buckets the visible points.
 fn trace_shared_eyes(
     statics: &Renderer,
     pass: &PassSamples,
     swept: Swept,
-    common_set: &PhotonSet,
+    [common_set, unstable_set]: [&PhotonSet; 2],
     common_estimates: bool,
 ) -> (SharedEyes, PassStats) {
     let pixels = (statics.settings.width * statics.settings.height) as usize;
@@ -496,9 +525,10 @@ fn trace_shared_eyes(
             .with_min_len(64)
             .map(|r| {
                 let eye = &r.end.result;
-                let sums = eye
-                    .point
-                    .map_or(PhotonSums::default(), |vp| sum_over(&vp, &[(common_set, r.common_round)]));
+                let sums = eye.point.map_or(PhotonSums::default(), |vp| {
+                    let unstable_round = unstable_set.first_round(&vp);
+                    sum_over(&vp, &[(common_set, r.common_round), (unstable_set, unstable_round)])
+                });
                 common_set.estimate_cut(eye, sums, |vp| *r.edge_cut.insert(common_set.edge_cut(vp)))
             })
             .collect();
