@@ -451,23 +451,28 @@ impl Shot {
 /// Reuse is decided per span of frames over which the same things move (see [`motion_spans`]):
 /// each span is prepared on its own, so an object that moves only in frames 10 to 12 is static
 /// geometry for the frames before and after. Every span renders with the first span's radius.
+/// Spans are found over every frame asked for, so a `--resume`d render prepares the frames it
+/// has left as the first run did.
 pub fn render(settings: &RenderSettings) -> Result<RenderReport, String> {
     let description = Arc::new(load_description(settings)?);
     std::fs::create_dir_all(&settings.out_dir)
         .map_err(|e| format!("cannot create output folder {}: {e}", settings.out_dir.display()))?;
     let mut report = RenderReport::default();
-    let (skipped, todo): (Vec<i32>, Vec<i32>) =
-        settings.frames.iter().partition(|&&f| settings.resume && output_path(settings, f).exists());
-    report.skipped = skipped;
+    let done = |f: &i32| settings.resume && output_path(settings, *f).exists();
+    report.skipped = settings.frames.iter().copied().filter(done).collect();
     let mut span_settings = settings.clone();
-    for span in motion_spans(&description, &todo, shutter(settings, &description)) {
+    for span in motion_spans(&description, &settings.frames, shutter(settings, &description)) {
+        let todo: Vec<i32> = span.iter().copied().filter(|f| !done(f)).collect();
+        if todo.is_empty() && span_settings.radius.is_some() {
+            continue;
+        }
         span_settings.frames = span;
         let shot = Shot::new(&span_settings, Arc::clone(&description))?;
         span_settings.radius = Some(shot.sppm.initial_radius);
         report.fixed_bvh_builds += 1;
-        let block_frames = shot.block_frames(settings, span_settings.frames.len());
+        let block_frames = shot.block_frames(settings, todo.len());
         report.block_frames = report.block_frames.max(block_frames);
-        for block in span_settings.frames.chunks(block_frames) {
+        for block in todo.chunks(block_frames) {
             render_block(&shot, settings, block, &mut report)?;
         }
     }
@@ -770,8 +775,8 @@ pub fn write_frame(film: &Film, errors: &[PixelError], path: &Path) -> Result<()
     film.write_exr(path, &[("Error.Y", bound), ("Variance.Y", variance)])
 }
 
-/// What stops `frame`, after `passes` passes, if anything: its target error (`target_met`, as its monitor found), its
-/// time budget or the pass count.
+/// What stops `frame`, after `passes` passes, if anything: its target error (`target_met`, as
+/// its monitor found), its time budget or the pass count.
 fn stop_reason(
     settings: &RenderSettings,
     frame: &FrameInProgress,

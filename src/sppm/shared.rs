@@ -143,7 +143,7 @@ struct SharedEyes {
     records: Vec<EyeRecord>,
     /// The pixels whose path or direct light meets the swept box (frames test those), in order.
     watched: Vec<u32>,
-    /// Each pixel's estimate from the common photons alone, and its visible points bucketed by
+    /// Each pixel's estimate from every shared photon, and its visible points bucketed by
     /// position; when frames share estimates (their surfaces' open edges are the same).
     common: Option<(Vec<PixelEstimate>, PointGrid)>,
 }
@@ -305,7 +305,7 @@ impl PixelMarks {
     }
 }
 
-/// Visible points bucketed by position, to find those a frame's own photons reach.
+/// Visible points bucketed by position, to find those the photons a frame changes reach.
 struct PointGrid {
     grid: PhotonGrid,
     /// The sorted points' pixels and positions.
