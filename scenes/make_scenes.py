@@ -22,6 +22,9 @@ Writes scenes/<name>.gltf and scenes/<name>.bin:
   frosted ice cube floating in it, under a low sun-like light;
 - many_lights: a room lit only by 2400 small coloured bulbs of varied strength strung under its
   ceiling, with a glass sphere on a table (the light tree's scene);
+- sunlit_room: a closed room on a 20 m ground plane, lit through one small window by a low sun
+  and a blue sky, a glass ball on a table in the sun's patch (visibility-driven photons' scene:
+  about 0.1% of uniform photon paths reach a point the camera sees);
 - night_city (built for the benchmark, tests/bench/blender_scenes.py, not exported here): a city
   at night seen from above, 928 street lamps and 1485 lit windows (the light tree's second scene).
 
@@ -138,8 +141,13 @@ def export(name, animated=False):
 def reset_with_addon():
     """An empty file with the add-on enabled (as a user enables it), for the material settings it
     adds and its export."""
-    import addon_utils
     reset()
+    enable_addon()
+
+
+def enable_addon():
+    """Enables the add-on (linked into the user's add-ons), as a user enables it."""
+    import addon_utils
     addons = pathlib.Path(bpy.utils.user_resource('SCRIPTS', path="addons", create=True))
     if not (addons / "caustic").exists():
         (addons / "caustic").symlink_to(HERE.parent / "addon")
@@ -555,9 +563,58 @@ def night_city_scene(blocks=7, block_size=6.0, street=4.0):
     set_resolution(320, 240)
 
 
+def sun(elevation_deg, azimuth_deg, strength, angle_deg=0.5):
+    """A sun light `elevation_deg` above the horizon, shining from azimuth `azimuth_deg` (0: from
+    +y, 90: from +x), of irradiance `strength` W/m^2."""
+    bpy.ops.object.light_add(type="SUN")
+    light = bpy.context.object
+    light.name = "Sun"
+    # A sun shines along its -Z: tilt it down from the zenith toward the azimuth it comes from.
+    light.rotation_euler = (math.radians(90.0 - elevation_deg), 0.0, math.radians(180.0 - azimuth_deg))
+    light.data.energy = strength
+    light.data.angle = math.radians(angle_deg)
+    return light
+
+
+def sunlit_room_scene(ground=20.0):
+    """A closed room (4 x 4 x 2.5 m) on a large sunlit ground plane (`ground` m square), lit
+    through one small window (1 x 1 m) by a low sun and a blue sky: the sun's patch falls on
+    a table where a glass ball focuses it into a caustic. Nearly every photon from the sun and
+    the sky lands outside, where the camera (inside) sees nothing: the visibility-driven photons'
+    scene (Hachisuka & Jensen 2011's sunlit room), built but not exported."""
+    reset()
+    white = material("Plaster", (0.75, 0.73, 0.7))
+    plane("Ground", ground, (0, 0, 0), (0, 0, 0), material("Grass", (0.15, 0.3, 0.08)))
+    wall = 0.1
+    block("Roof", (4.0 + 2 * wall, 4.0 + 2 * wall, wall), (0, 0, 2.5 + wall / 2), 0.0, white)
+    block("FrontWall", (4.0 + 2 * wall, wall, 2.5), (0, -2.0 - wall / 2, 1.25), 0.0, white)
+    block("LeftWall", (wall, 4.0, 2.5), (-2.0 - wall / 2, 0, 1.25), 0.0, white)
+    block("RightWall", (wall, 4.0, 2.5), (2.0 + wall / 2, 0, 1.25), 0.0, white)
+    # The back wall (y = 2) around a window 1 m wide and high, from 1.2 m to 2.2 m.
+    back = material("Back plaster", (0.6, 0.65, 0.75))
+    y = 2.0 + wall / 2
+    block("BackWallLeft", (1.5 + wall, wall, 2.5), (-1.25 - wall / 2, y, 1.25), 0.0, back)
+    block("BackWallRight", (1.5 + wall, wall, 2.5), (1.25 + wall / 2, y, 1.25), 0.0, back)
+    block("BackWallBelow", (1.0, wall, 1.2), (0, y, 0.6), 0.0, back)
+    block("BackWallAbove", (1.0, wall, 0.3), (0, y, 2.35), 0.0, back)
+    block("Table", (1.2, 0.8, 0.75), (0.0, 0.55, 0.375), 0.0, material("Table top", (0.8, 0.8, 0.8)))
+    glass_sphere((0.0, 0.9, 0.9), 0.15, glass_material())
+    sun(40.0, 0.0, 5.0)
+    world((0.35, 0.5, 0.9), 0.6)
+    camera((1.3, -1.8, 1.5), (0.0, 0.55, 0.8), lens_mm=24.0)
+    set_resolution(256, 192)
+
+
 def make_many_lights():
     many_lights_scene()
     export("many_lights")
+
+
+def make_sunlit_room():
+    """Exported through the add-on, which writes the world (Blender's exporter drops it)."""
+    sunlit_room_scene()
+    enable_addon()
+    export_with_addon("sunlit_room")
 
 
 if __name__ == "__main__":
@@ -571,3 +628,4 @@ if __name__ == "__main__":
     make_furnace()
     make_spot_glass()
     make_many_lights()
+    make_sunlit_room()

@@ -6,7 +6,9 @@ use std::path::Path;
 use std::time::Instant;
 
 use crate::film::{Film, FilmMode};
-use crate::frames::{self, add_estimates, load_description, RenderReport, RenderSettings, Shot};
+use crate::frames::{
+    self, add_estimates, load_description, PhotonSampling, RenderReport, RenderSettings, Shot,
+};
 use crate::memory;
 use crate::sppm::{PassStats, Renderer};
 use rayon::prelude::*;
@@ -95,10 +97,12 @@ pub fn run(
     resolution: [u32; 2],
     passes: std::ops::Range<u64>,
     photons: Option<usize>,
+    photon_sampling: PhotonSampling,
 ) -> Result<(), String> {
     let mut settings = RenderSettings::new(scene_path, Path::new("renders"));
     settings.resolution = Some(resolution);
     settings.photons = photons;
+    settings.photon_sampling = photon_sampling;
     let description = load_description(&settings)?;
     let start = Instant::now();
     let shot = Shot::new(&settings, std::sync::Arc::new(description))?;
@@ -216,5 +220,20 @@ fn print_throughput(threads: usize, passes: u64, timed: &Timed, photons_per_pass
     println!(
         "  time split: eye paths {eye:.0}%, photon paths {photon:.0}%, grid build {grid:.0}%, gather {gather:.0}%, accumulation {:.0}%",
         accumulation_s / seconds * 100.0
+    );
+    print_photon_sampling(stats);
+}
+
+/// The fractions of photon paths a visible point sees, among the pilot's uniform paths and the
+/// Markov chains' steps (`--photon-sampling`).
+fn print_photon_sampling(stats: &PassStats) {
+    let share = |seen: u64, all: u64| match all {
+        0 => "none traced".to_string(),
+        _ => format!("{:.1}% of {all}", seen as f64 / all as f64 * 100.0),
+    };
+    println!(
+        "  photon paths a visible point sees: uniform pilot {}, chain proposals {}",
+        share(stats.pilot_paths_seen, stats.pilot_paths),
+        share(stats.chain_steps_seen, stats.chain_steps)
     );
 }

@@ -22,7 +22,7 @@ use crate::sampling::pass_time_sample;
 use crate::scene::description::{LensSettings, Shutter};
 use crate::scene::pose::{lens, Motion};
 use crate::scene::{Description, Prepared, Scene, TimeRange, DEFAULT_RADIUS_FRACTION};
-pub use crate::sppm::LightSampling;
+pub use crate::sppm::{LightSampling, PhotonSampling};
 use rayon::prelude::*;
 
 use crate::sppm::{
@@ -84,6 +84,8 @@ pub struct RenderSettings {
     pub wavelength_nm: Option<f32>,
     /// How next-event estimation chooses a light.
     pub light_sampling: LightSampling,
+    /// How photon paths draw their primary samples.
+    pub photon_sampling: PhotonSampling,
     /// Spectral bands written beside Combined (0 for none).
     pub spectral_bins: usize,
     /// Write Cycles' Denoising Albedo and Denoising Normal passes.
@@ -124,6 +126,7 @@ impl RenderSettings {
             progress: ProgressStyle::None,
             wavelength_nm: None,
             light_sampling: LightSampling::Tree,
+            photon_sampling: PhotonSampling::Uniform,
             spectral_bins: 0,
             denoising_passes: false,
             shutter_frames: None,
@@ -214,6 +217,17 @@ const DEFAULT_RADIUS_PHOTONS: f64 = 49_152.0;
 pub fn default_radius(scene: &Scene, photons_per_pass: usize) -> f64 {
     let shrink = (DEFAULT_RADIUS_PHOTONS / photons_per_pass.max(1) as f64).powf(1.0 / 6.0).min(1.0);
     f64::from(scene.bounding_sphere().radius) * DEFAULT_RADIUS_FRACTION * shrink
+}
+
+/// How a render of `settings` draws its photon paths: `auto` is uniform where anything in the
+/// scene is animated, so that frames sharing photon paths (reuse across frames, which draws them
+/// uniformly) give the images `--no-reuse` and a farm's single frames give.
+fn photon_sampling(settings: &RenderSettings, description: &Description) -> PhotonSampling {
+    let forever = TimeRange { start: f32::MIN, end: f32::MAX };
+    match settings.photon_sampling {
+        PhotonSampling::Auto if !Motion::within(description, forever).is_still() => PhotonSampling::Uniform,
+        chosen => chosen,
+    }
 }
 
 /// Loads the scene description and prints its warnings to stderr.
@@ -321,6 +335,7 @@ fn fingerprint(
         "seed": sppm.seed,
         "wavelength_nm": sppm.fixed_wavelength_nm,
         "light_sampling": format!("{:?}", sppm.light_sampling),
+        "photon_sampling": format!("{:?}", sppm.photon_sampling),
         "spectral_bins": settings.spectral_bins,
         "denoising_passes": settings.denoising_passes,
         "shutter": [shutter.open, shutter.length],
@@ -350,6 +365,7 @@ impl Shot {
         let [width, height] = crop.size;
         let shutter = shutter(settings, &description);
         let range = time_range(&settings.frames, shutter, description.fps);
+        let photon_sampling = photon_sampling(settings, &description);
         let lens_settings = lens_settings(settings, &description);
         if let Some(l) = lens_settings.filter(|l| l.fstop > 0.0 && !(l.focus_distance > 0.0)) {
             return Err(format!(
@@ -373,6 +389,7 @@ impl Shot {
             seed: settings.seed,
             fixed_wavelength_nm: settings.wavelength_nm,
             light_sampling: settings.light_sampling,
+            photon_sampling,
         };
         let still_accel =
             || Accel::new(Arc::clone(&fixed_bvh), Bvh::empty()).with_instances(instanced_bvh.clone());
@@ -471,6 +488,12 @@ pub fn render(settings: &RenderSettings) -> Result<RenderReport, String> {
         span_settings.radius = Some(shot.sppm.initial_radius);
         report.fixed_bvh_builds += 1;
         let block_frames = shot.block_frames(settings, todo.len());
+        if block_frames > 1 && settings.photon_sampling == PhotonSampling::Visible {
+            eprintln!(
+                "caustic: warning: frames {:?} share their photon paths (reuse across frames), which are drawn uniformly; --no-reuse draws each frame's by visibility",
+                span_settings.frames
+            );
+        }
         report.block_frames = report.block_frames.max(block_frames);
         for block in todo.chunks(block_frames) {
             render_block(&shot, settings, block, &mut report)?;

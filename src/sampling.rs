@@ -14,6 +14,8 @@ pub enum Stream {
     Eye = 1,
     /// One per photon path and pass.
     Photon = 2,
+    /// One per Markov chain of photon paths and pass.
+    PhotonChain = 3,
 }
 
 /// SplitMix64's finaliser: a good 64-bit mix.
@@ -90,6 +92,44 @@ impl Sampler {
     /// Two uniform numbers in [0, 1).
     pub fn next_2d(&mut self) -> Vec2 {
         Vec2::new(self.next_1d(), self.next_1d())
+    }
+}
+
+/// Where a path draws its uniform numbers from: a stream of its own, or a point of primary
+/// sample space that a Markov chain moves ([`PrimarySample`]).
+pub trait Uniforms {
+    /// One uniform number in [0, 1).
+    fn next_1d(&mut self) -> f32;
+
+    /// Two uniform numbers in [0, 1).
+    fn next_2d(&mut self) -> Vec2 {
+        let u = self.next_1d();
+        Vec2::new(u, self.next_1d())
+    }
+}
+
+impl Uniforms for Sampler {
+    #[inline]
+    fn next_1d(&mut self) -> f32 {
+        Sampler::next_1d(self)
+    }
+}
+
+impl<T: Uniforms> Uniforms for &mut T {
+    #[inline]
+    fn next_1d(&mut self) -> f32 {
+        (**self).next_1d()
+    }
+}
+
+/// `u` moved by `step` (of either sign) and wrapped into [0, 1): a symmetric move on the circle.
+pub fn wrap_unit(u: f32, step: f32) -> f32 {
+    let moved = u + step;
+    let wrapped = moved - moved.floor();
+    if wrapped < 1.0 {
+        wrapped
+    } else {
+        0.0
     }
 }
 

@@ -207,6 +207,11 @@ pub struct Motion {
 }
 
 impl Motion {
+    /// Whether nothing changes.
+    pub fn is_still(&self) -> bool {
+        self.meshes.is_empty() && self.lights.is_empty() && self.materials.is_empty() && !self.camera
+    }
+
     /// What changes in `description` within `range`.
     pub fn within(description: &Description, range: TimeRange) -> Self {
         let rig = &description.rig;

@@ -10,7 +10,9 @@ mod grid;
 mod guides;
 mod media;
 mod pass;
+mod photon_sampling;
 mod photons;
+mod points;
 pub mod radius;
 mod renderer;
 mod see_through;
@@ -18,6 +20,7 @@ mod shared;
 mod visible;
 
 pub use guides::Guide;
+pub use photon_sampling::{PhotonSampling, AUTO_VISIBLE_BELOW};
 pub use photons::Photon;
 pub use renderer::{
     Crop, LightSampling, PassSamples, PassStats, PixelEstimate, Renderer, SppmSettings, VisiblePoint,

@@ -1,12 +1,10 @@
 //! One whole pass for one frame (DESIGN.md steps 1 to 4): its samples, the eye pass, the photon
 //! pass and the gather.
 
-use rayon::prelude::*;
-
 use std::time::Instant;
 
 use super::gather::{gather, PhotonSet};
-use super::photons::{photon_chunks, trace_photon, Photon};
+use super::photon_sampling::visible_points;
 use super::renderer::{collect_counting, PassSamples, PassStats, PixelEstimate, Renderer};
 use super::visible::{trace_eye_path, EyeResult};
 
@@ -22,7 +20,10 @@ impl Renderer<'_> {
         };
         let (points, eye_stats) = self.trace_visible_points(&pass);
         let eye_ns = lap();
-        let (photons, photon_stats) = self.trace_photons(&pass);
+        let (photons, photon_stats) = match self.whole_image_points(&pass) {
+            Some(whole) => self.trace_photons(&pass, visible_points(&whole)),
+            None => self.trace_photons(&pass, visible_points(&points)),
+        };
         let photon_ns = lap();
         let set = PhotonSet::new(&photons, pass.radius, &self.scene.open_edges);
         let grid_ns = lap();
@@ -31,22 +32,8 @@ impl Renderer<'_> {
         (pass, estimates, eye_stats + photon_stats + stages)
     }
 
-    fn trace_visible_points(&self, pass: &PassSamples) -> (Vec<EyeResult>, PassStats) {
+    pub(super) fn trace_visible_points(&self, pass: &PassSamples) -> (Vec<EyeResult>, PassStats) {
         let pixels = (self.settings.width * self.settings.height) as usize;
         collect_counting(pixels, |pixel| trace_eye_path(self, pass, pixel))
-    }
-
-    fn trace_photons(&self, pass: &PassSamples) -> (Vec<Photon>, PassStats) {
-        let chunks: Vec<(Vec<Photon>, PassStats)> = photon_chunks(self.settings.photons_per_pass)
-            .map(|paths| {
-                let mut photons = Vec::with_capacity(paths.end as usize - paths.start as usize);
-                let stats = paths.map(|k| trace_photon(self, pass, k, &mut photons)).sum();
-                (photons, stats)
-            })
-            .collect();
-        let stats = chunks.iter().map(|(_, s)| *s).sum();
-        let mut photons = Vec::with_capacity(chunks.iter().map(|(p, _)| p.len()).sum());
-        chunks.into_iter().for_each(|(p, _)| photons.extend(p));
-        (photons, stats)
     }
 }

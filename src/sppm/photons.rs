@@ -15,7 +15,7 @@ use super::renderer::{PassSamples, PassStats, Renderer, MAX_DEPTH};
 use crate::geometry::offset_origin;
 use crate::lights::SoftFalloff;
 use crate::materials::{Bsdf, Transport};
-use crate::sampling::{stream, Sampler, Stream};
+use crate::sampling::{stream, Sampler, Stream, Uniforms};
 use crate::spectrum::{hero_only, SampledSpectrum, LANES};
 
 /// A stored photon.
@@ -33,9 +33,9 @@ pub struct Photon {
     pub hero_only: bool,
 }
 
-/// A photon path about to trace its next segment.
+/// A photon path about to trace its next segment, drawing its uniform numbers from `R`.
 #[derive(Clone)]
-pub struct PhotonState {
+pub struct PhotonState<R = Sampler> {
     /// Where the segment starts (16-byte aligned, as is the direction: a state is written
     /// whole and read whole, and 12-byte fields read as 16-byte words stall the store buffer).
     pub origin: Vec3A,
@@ -54,23 +54,41 @@ pub struct PhotonState {
     pub scattered: bool,
     /// Its light's Soft Falloff, until the path first meets a surface.
     pub soft_falloff: Option<SoftFalloff>,
-    /// The path's random stream, where this segment leaves it.
-    pub rng: Sampler,
+    /// The path's random numbers, where this segment leaves them.
+    pub rng: R,
 }
 
 /// Photon paths traced together by one task.
 const CHUNK: usize = 1024;
 
-/// The photon paths `0..count` in chunks for parallel tasks, in order.
-pub fn photon_chunks(count: usize) -> impl IndexedParallelIterator<Item = std::ops::Range<u64>> {
-    let chunk_paths = move |chunk: usize| (chunk * CHUNK) as u64..((chunk + 1) * CHUNK).min(count) as u64;
-    (0..count.div_ceil(CHUNK)).into_par_iter().map(chunk_paths)
+/// The photon paths `paths` in chunks for parallel tasks, in order.
+pub fn photon_chunks(
+    paths: std::ops::Range<usize>,
+) -> impl IndexedParallelIterator<Item = std::ops::Range<u64>> {
+    let (start, end) = (paths.start, paths.end);
+    let chunk_paths =
+        move |chunk: usize| (start + chunk * CHUNK) as u64..(start + (chunk + 1) * CHUNK).min(end) as u64;
+    (0..(end - start).div_ceil(CHUNK)).into_par_iter().map(chunk_paths)
 }
 
 /// Photon path `k` of `pass` as it leaves its light, and the index of that light; `None` when no
 /// light emits at the pass's wavelengths.
 pub fn start_photon(renderer: &Renderer, pass: &PassSamples, k: u64) -> Option<(PhotonState, usize)> {
-    let mut rng = stream(renderer.settings.seed, Stream::Photon, pass.index, k);
+    emit_photon(renderer, pass, photon_stream(renderer, pass, k))
+}
+
+/// The random stream of photon path `k` of `pass`.
+pub fn photon_stream(renderer: &Renderer, pass: &PassSamples, k: u64) -> Sampler {
+    stream(renderer.settings.seed, Stream::Photon, pass.index, k)
+}
+
+/// A photon path drawing from `rng` as it leaves its light, and the index of that light; `None`
+/// when no light emits at the pass's wavelengths.
+pub fn emit_photon<R: Uniforms>(
+    renderer: &Renderer,
+    pass: &PassSamples,
+    mut rng: R,
+) -> Option<(PhotonState<R>, usize)> {
     let (index, p_light) = renderer.light_choice.sample(rng.next_1d())?;
     let emitted =
         renderer.scene.lights[index].emit_photon(rng.next_2d(), rng.next_2d(), &pass.wavelengths)?;
@@ -100,12 +118,12 @@ pub fn trace_photon(renderer: &Renderer, pass: &PassSamples, k: u64, out: &mut V
 /// Traces a path from `state` to its end, appending what it stores to `out`. Before each
 /// segment's photon is stored, `watch` sees the state the segment started from, the distance to
 /// what it hit (infinite when it left the scene) and how many photons the path had stored.
-pub fn continue_photon(
+pub fn continue_photon<R: Uniforms>(
     renderer: &Renderer,
     pass: &PassSamples,
-    mut state: PhotonState,
+    mut state: PhotonState<R>,
     out: &mut Vec<Photon>,
-    mut watch: impl FnMut(&PhotonState, f32, usize),
+    mut watch: impl FnMut(&PhotonState<R>, f32, usize),
 ) -> PassStats {
     let scene = renderer.scene;
     let mut stats = PassStats::default();

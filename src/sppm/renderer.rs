@@ -12,6 +12,7 @@ use crate::scene::Scene;
 use crate::spectrum::{SampledSpectrum, Wavelengths};
 
 use super::media::{media_at, Media};
+use super::photon_sampling::PhotonSampling;
 use super::radius;
 
 /// Longest path (bounces) an eye path follows through delta surfaces, and a photon overall.
@@ -115,6 +116,8 @@ pub struct SppmSettings {
     pub fixed_wavelength_nm: Option<f32>,
     /// How next-event estimation chooses a light.
     pub light_sampling: LightSampling,
+    /// How photon paths draw their primary samples.
+    pub photon_sampling: PhotonSampling,
 }
 
 /// How next-event estimation chooses a light (photons always leave lights in proportion to their
@@ -176,6 +179,14 @@ pub struct PassStats {
     pub photons_stored: u64,
     /// Points drawn on the camera's aperture (zero for a pinhole).
     pub lens_samples: u64,
+    /// Uniform photon paths traced as a pass's pilot.
+    pub pilot_paths: u64,
+    /// Pilot paths that a visible point sees.
+    pub pilot_paths_seen: u64,
+    /// Steps of photon Markov chains.
+    pub chain_steps: u64,
+    /// Chain steps whose proposed path a visible point sees.
+    pub chain_steps_seen: u64,
     /// Segments of shared paths tested against a frame's moving triangles (reuse across frames).
     pub moving_tests: u64,
     /// Wall-clock nanoseconds of a single-frame pass's stages: eye paths, photon paths, the
@@ -198,6 +209,10 @@ impl std::ops::Add for PassStats {
             photon_rays: self.photon_rays + o.photon_rays,
             photons_stored: self.photons_stored + o.photons_stored,
             lens_samples: self.lens_samples + o.lens_samples,
+            pilot_paths: self.pilot_paths + o.pilot_paths,
+            pilot_paths_seen: self.pilot_paths_seen + o.pilot_paths_seen,
+            chain_steps: self.chain_steps + o.chain_steps,
+            chain_steps_seen: self.chain_steps_seen + o.chain_steps_seen,
             moving_tests: self.moving_tests + o.moving_tests,
             stage_ns: std::array::from_fn(|i| self.stage_ns[i] + o.stage_ns[i]),
         }
@@ -317,6 +332,11 @@ impl<'a> Renderer<'a> {
     /// paths must choose their lights alike).
     pub fn choosing_lights_as(other: &Renderer, scene: &'a Scene, accel: &'a Accel) -> Self {
         Renderer::with_light_choice(scene, accel, Arc::clone(&other.light_choice), other.settings.clone())
+    }
+
+    /// This renderer with `settings` instead.
+    pub(super) fn with_settings(&self, settings: SppmSettings) -> Renderer<'a> {
+        Renderer::with_light_choice(self.scene, self.accel, Arc::clone(&self.light_choice), settings)
     }
 
     /// A light for next-event estimation at `p`, of shading normal `n`, with the probability of

@@ -22,7 +22,6 @@
 //! shared ones, so the common estimate is its own, up to the order of the sum.
 
 use std::ops::Range;
-use std::sync::atomic::{AtomicU64, Ordering};
 use std::sync::Arc;
 
 use glam::Vec3;
@@ -30,8 +29,8 @@ use rayon::prelude::*;
 
 use super::direct::ShadowRay;
 use super::gather::{sum_over, FirstRound, PhotonSet, PhotonSums};
-use super::grid::PhotonGrid;
 use super::photons::{continue_photon, photon_chunks, start_photon, trace_photon, Photon, PhotonState};
+use super::points::{PixelMarks, PointGrid};
 use super::renderer::{collect_counting, PassSamples, PassStats, PixelEstimate, Renderer};
 use super::visible::{
     continue_eye_path, start_eye_path, trace_eye_path, with_direct, EyeEnd, EyeEvent, EyeResult, EyeState,
@@ -279,77 +278,10 @@ fn differing_estimates(
     (estimates, stats)
 }
 
-/// A mark per pixel, set from any thread.
-struct PixelMarks(Vec<AtomicU64>);
-
-impl PixelMarks {
-    fn new(pixels: usize) -> Self {
-        PixelMarks((0..pixels.div_ceil(64)).map(|_| AtomicU64::new(0)).collect())
-    }
-
-    fn mark(&self, pixel: u32) {
-        self.0[pixel as usize / 64].fetch_or(1 << (pixel % 64), Ordering::Relaxed);
-    }
-
-    /// The marked pixels, in order.
-    fn marked(&self) -> Vec<u32> {
-        let mut pixels = Vec::new();
-        for (w, word) in self.0.iter().enumerate() {
-            let mut bits = word.load(Ordering::Relaxed);
-            while bits != 0 {
-                pixels.push(w as u32 * 64 + bits.trailing_zeros());
-                bits &= bits - 1;
-            }
-        }
-        pixels
-    }
-}
-
-/// Visible points bucketed by position, to find those the photons a frame changes reach.
-struct PointGrid {
-    grid: PhotonGrid,
-    /// The sorted points' pixels and positions.
-    pixels: Vec<u32>,
-    positions: Vec<Vec3>,
-    radius: f32,
-}
-
-impl PointGrid {
-    fn new(records: &[EyeRecord], radius: f32) -> Self {
-        let (pixels, points): (Vec<u32>, Vec<Vec3>) = records
-            .iter()
-            .enumerate()
-            .filter_map(|(pixel, r)| r.end.result.point.map(|vp| (pixel as u32, vp.p)))
-            .unzip();
-        let (grid, order) = PhotonGrid::build(&points, radius);
-        PointGrid {
-            grid,
-            pixels: order.iter().map(|&i| pixels[i as usize]).collect(),
-            positions: order.iter().map(|&i| points[i as usize]).collect(),
-            radius,
-        }
-    }
-
-    /// Marks the pixels whose visible point lies within the radius of some photon (with a
-    /// margin for rounding: a gather counts a photon by the same distance computed otherwise).
-    fn mark_near(&self, photons: &[Photon], marks: &PixelMarks) {
-        let reach2 = self.radius * self.radius * 1.001;
-        photons.par_iter().with_min_len(64).for_each(|photon| {
-            self.grid.for_each_near(photon.p, |range| {
-                for i in range {
-                    if self.positions[i].distance_squared(photon.p) < reach2 {
-                        marks.mark(self.pixels[i]);
-                    }
-                }
-            });
-        });
-    }
-}
-
 /// Traces every photon path of `pass` against the static triangles, keeping the segments that
 /// meet the swept box.
 fn trace_shared_photons(statics: &Renderer, pass: &PassSamples, swept: Swept) -> (SharedPhotons, PassStats) {
-    let chunks: Vec<(SharedPhotons, PassStats)> = photon_chunks(statics.settings.photons_per_pass)
+    let chunks: Vec<(SharedPhotons, PassStats)> = photon_chunks(0..statics.settings.photons_per_pass)
         .map(|paths| {
             let mut traced = SharedPhotons { photons: Vec::new(), records: Vec::new() };
             let stats = paths.map(|path| trace_shared_photon(statics, pass, path, swept, &mut traced)).sum();
@@ -532,7 +464,9 @@ fn trace_shared_eyes(
                 common_set.estimate_cut(eye, sums, |vp| *r.edge_cut.insert(common_set.edge_cut(vp)))
             })
             .collect();
-        (estimates, PointGrid::new(&records, pass.radius))
+        let points =
+            records.iter().enumerate().filter_map(|(pixel, r)| r.end.result.point.map(|vp| (pixel, vp.p)));
+        (estimates, PointGrid::new(points, pass.radius))
     });
     (SharedEyes { records, watched, common }, stats)
 }

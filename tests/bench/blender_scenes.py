@@ -26,6 +26,9 @@ SCENES = {
     "many_lights": make_scenes.many_lights_scene,
     # A city block grid at night: street lamps and lit windows (the light tree's second scene).
     "night_city": make_scenes.night_city_scene,
+    # A room lit through a small window by the sun and sky, inside a large ground plane (the
+    # visibility-driven photons' scene).
+    "sunlit_room": make_scenes.sunlit_room_scene,
 }
 
 

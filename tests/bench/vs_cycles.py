@@ -122,7 +122,8 @@ def make_reference(binary, name, args):
     scene = build(name, args.resolution, args.binary)
     work = pathlib.Path(tempfile.mkdtemp(prefix=f"caustic-ref-{name}-"))
     gltf = export(scene, work)
-    flags = ["--passes", str(args.make_reference), "--seed", str(REFERENCE_SEED), "--threads", str(args.threads)]
+    flags = ["--passes", str(args.make_reference), "--seed", str(REFERENCE_SEED), "--threads", str(args.threads),
+             *args.caustic_flags.split()]
     wall, cpu = render_caustic(args.binary, gltf, work, flags)
     (work / "frame_0001.exr").replace(HERE / f"{name}.exr")
     commit = subprocess.run(["git", "-C", str(ROOT), "rev-parse", "--short", "HEAD"], capture_output=True,
@@ -134,6 +135,7 @@ def make_reference(binary, name, args):
         "scene": f"scenes/make_scenes.py {SCENES[name].__name__}(), exported by the add-on",
         "resolution": list(args.resolution), "passes": args.make_reference, "seed": REFERENCE_SEED,
         "photons_per_pass": "one per pixel (default)", "threads": args.threads,
+        "flags": args.caustic_flags,
         "wall_s": round(wall, 1), "cpu_s": round(cpu, 1), "date": datetime.date.today().isoformat(),
     }
     provenance_path.write_text(json.dumps(provenance, indent=2) + "\n")
