@@ -20,10 +20,10 @@ mod shared;
 mod visible;
 
 pub use guides::Guide;
-pub use photon_sampling::{PhotonSampling, AUTO_VISIBLE_BELOW};
+pub use photon_sampling::AUTO_VISIBLE_BELOW;
 pub use photons::Photon;
 pub use renderer::{
-    Crop, LightSampling, PassSamples, PassStats, PixelEstimate, Renderer, SppmSettings, VisiblePoint,
-    MAX_DEPTH,
+    Crop, LightSampling, PassSamples, PassStats, PhotonSampling, PixelEstimate, Renderer, SppmSettings,
+    VisiblePoint, MAX_DEPTH,
 };
 pub use shared::{run_shared_pass, FrameEstimates, SharedPassOutput};

@@ -22,22 +22,9 @@ use rayon::prelude::*;
 
 use super::photons::{continue_photon, emit_photon, photon_stream, trace_photon, Photon};
 use super::points::PointGrid;
-use super::renderer::{Crop, PassSamples, PassStats, Renderer, SppmSettings};
+use super::renderer::{Crop, PassSamples, PassStats, PhotonSampling, Renderer, SppmSettings};
 use super::visible::EyeResult;
 use crate::sampling::{stream, wrap_unit, Sampler, Stream, Uniforms};
-
-/// How a pass's photon paths draw their primary samples.
-#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, clap::ValueEnum)]
-pub enum PhotonSampling {
-    /// Each path from a stream of its own.
-    #[default]
-    Uniform,
-    /// Markov chains over the paths that some visible point sees.
-    Visible,
-    /// Per pass: visible where fewer than [`AUTO_VISIBLE_BELOW`] of the pilot's paths are seen,
-    /// else uniform.
-    Auto,
-}
 
 /// The share of a pass's photon paths traced uniformly first, as the pilot.
 const PILOT_SHARE: usize = 16;

@@ -12,7 +12,6 @@ use crate::scene::Scene;
 use crate::spectrum::{SampledSpectrum, Wavelengths};
 
 use super::media::{media_at, Media};
-use super::photon_sampling::PhotonSampling;
 use super::radius;
 
 /// Longest path (bounces) an eye path follows through delta surfaces, and a photon overall.
@@ -129,6 +128,19 @@ pub enum LightSampling {
     /// By the light tree: power, distance and orientation as seen from the point.
     #[default]
     Tree,
+}
+
+/// How a pass's photon paths draw their primary samples (`photon_sampling.rs`).
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, clap::ValueEnum)]
+pub enum PhotonSampling {
+    /// Each path from a stream of its own.
+    #[default]
+    Uniform,
+    /// Markov chains over the paths that some visible point sees.
+    Visible,
+    /// Per pass: visible where fewer than `AUTO_VISIBLE_BELOW` of the pilot's paths are seen,
+    /// else uniform.
+    Auto,
 }
 
 impl SppmSettings {
