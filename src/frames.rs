@@ -223,11 +223,15 @@ pub fn default_radius(scene: &Scene, photons_per_pass: usize) -> f64 {
 /// scene is animated, so that frames sharing photon paths (reuse across frames, which draws them
 /// uniformly) give the images `--no-reuse` and a farm's single frames give.
 fn photon_sampling(settings: &RenderSettings, description: &Description) -> PhotonSampling {
-    let forever = TimeRange { start: f32::MIN, end: f32::MAX };
     match settings.photon_sampling {
-        PhotonSampling::Auto if !Motion::within(description, forever).is_still() => PhotonSampling::Uniform,
+        PhotonSampling::Auto if is_animated(description) => PhotonSampling::Uniform,
         chosen => chosen,
     }
+}
+
+/// Whether anything in `description` changes over time.
+pub fn is_animated(description: &Description) -> bool {
+    !Motion::within(description, TimeRange { start: f32::MIN, end: f32::MAX }).is_still()
 }
 
 /// Loads the scene description and prints its warnings to stderr.

@@ -3,7 +3,7 @@
 
 use serde_json::{json, Value};
 
-use crate::frames::{load_description, motion_spans, shutter, PhotonSampling, RenderSettings, Shot};
+use crate::frames::{is_animated, load_description, motion_spans, shutter, RenderSettings, Shot};
 use crate::materials::Material;
 use crate::scene::description::Description;
 use crate::sppm::{Renderer, AUTO_VISIBLE_BELOW};
@@ -47,6 +47,7 @@ pub fn report(settings: &RenderSettings) -> Result<Value, String> {
     }
     let animated = animated_values(&description);
     let spans = motion_spans(&description, &settings.frames, shutter(settings, &description));
+    let animated_scene = is_animated(&description);
     let shot = Shot::new(settings, std::sync::Arc::new(description))?;
     let prepared = shot.prepared();
     let (fixed, moving) = prepared.triangle_counts();
@@ -103,22 +104,21 @@ pub fn report(settings: &RenderSettings) -> Result<Value, String> {
         "triangles": {"static": fixed, "moving": moving, "instanced": instanced.0, "instanced_stored": instanced.1},
         "deforming": deforming,
         "animated": animated,
-        "photons": photons(settings, &shot, reuse),
+        "photons": photons(settings, &shot, animated_scene, reuse),
         "skipped": skipped,
     }))
 }
 
-/// How photons are drawn and gathered: the sampling asked for; what pass 0's pilot finds (the
-/// fraction of uniform paths a visible point sees) and so what `auto` uses there; the first
-/// radius.
-fn photons(settings: &RenderSettings, shot: &Shot, reuse: bool) -> Value {
+/// How photons are drawn: the default sampling, what pass 0's pilot finds (the fraction of
+/// uniform paths a visible point sees) and so what `--photon-sampling auto` uses there; photons
+/// per pass and the first radius.
+fn photons(settings: &RenderSettings, shot: &Shot, animated: bool, reuse: bool) -> Value {
     let sppm = shot.sppm();
     let (scene, accel) = shot.pose(0.0);
     let pilot_seen = Renderer::new(&scene, &accel, sppm.clone()).pilot_seen_fraction(0);
-    let pass_0 = match sppm.photon_sampling {
-        PhotonSampling::Auto if pilot_seen >= AUTO_VISIBLE_BELOW => PhotonSampling::Uniform,
-        PhotonSampling::Auto => PhotonSampling::Visible,
-        chosen => chosen,
+    let auto_uses = match animated || pilot_seen >= AUTO_VISIBLE_BELOW {
+        true => "uniform",
+        false => "visible",
     };
     let shared = match reuse && settings.reuse {
         true => "frames rendered together share uniform photon paths (reuse across frames); --no-reuse draws each frame's by its sampling",
@@ -128,7 +128,7 @@ fn photons(settings: &RenderSettings, shot: &Shot, reuse: bool) -> Value {
         "sampling": format!("{:?}", sppm.photon_sampling).to_lowercase(),
         "auto_rule": format!("per pass: visible where fewer than {AUTO_VISIBLE_BELOW} of a uniform pilot's paths reach a visible point, else uniform; uniform where anything is animated"),
         "pilot_seen_fraction_pass_0": pilot_seen,
-        "pass_0_uses": format!("{pass_0:?}").to_lowercase(),
+        "auto_uses_on_pass_0": auto_uses,
         "frames": shared,
         "per_pass": sppm.photons_per_pass,
         "initial_radius": sppm.initial_radius,

@@ -122,3 +122,23 @@ fn the_error_bound_covers_the_true_error_with_visible_photons() {
         assert!((coverage - 0.9).abs() <= 0.10, "visible photons at {passes} passes: coverage {coverage:.3}");
     }
 }
+
+/// `caustic info` says what `--photon-sampling auto` uses on pass 0 and why: visible chains in the
+/// sunlit room (under 1% of uniform paths reach a visible point), uniform paths on the demo box
+/// (about 40%).
+#[test]
+fn info_says_what_auto_photon_sampling_uses() {
+    let photons = |scene: &str| {
+        let out = run_caustic(&["info", bundled_scene(scene).to_str().unwrap()]);
+        assert!(out.status.success(), "{}", String::from_utf8_lossy(&out.stderr));
+        let report: serde_json::Value = serde_json::from_slice(&out.stdout).unwrap();
+        report["photons"].clone()
+    };
+    let room = photons("sunlit_room.gltf");
+    assert!(room["pilot_seen_fraction_pass_0"].as_f64().unwrap() < 0.01, "{room}");
+    assert_eq!(room["auto_uses_on_pass_0"], "visible", "{room}");
+    let demo = photons("cornell_glass.gltf");
+    let seen = demo["pilot_seen_fraction_pass_0"].as_f64().unwrap();
+    assert!((0.3..0.5).contains(&seen), "{demo}");
+    assert_eq!(demo["auto_uses_on_pass_0"], "uniform", "{demo}");
+}
