@@ -194,12 +194,8 @@ fn trace_pilot(
         })
         .collect();
     let mut pilot = Pilot::empty();
+    chunks.into_iter().for_each(|chunk| pilot.extend(chunk));
     pilot.paths = count;
-    for chunk in chunks {
-        pilot.photons.extend(chunk.photons);
-        pilot.seen_paths.extend(chunk.seen_paths);
-        pilot.stats = pilot.stats + chunk.stats;
-    }
     pilot.counted_paths = pilot.paths;
     pilot.counted_seen = pilot.seen_paths.len() as u64;
     pilot.stats.pilot_paths = pilot.paths;
