@@ -60,8 +60,9 @@ impl Renderer<'_> {
         let seen = PointGrid::new(points, pass.radius);
         let round = paths.div_ceil(PILOT_SHARE);
         let mut pilot = trace_pilot(self, pass, 0..round, &seen);
-        let seen_fraction = pilot.counted_seen as f64 / pilot.counted_paths as f64;
-        if self.settings.photon_sampling == PhotonSampling::Auto && seen_fraction >= AUTO_VISIBLE_BELOW {
+        if self.settings.photon_sampling == PhotonSampling::Auto
+            && pilot.seen_fraction() >= AUTO_VISIBLE_BELOW
+        {
             let (rest, stats) = trace_uniform(self, pass, round..paths);
             pilot.photons.extend(rest);
             return (pilot.photons, pilot.stats + stats);
@@ -78,21 +79,17 @@ impl Renderer<'_> {
         let (photons, stats) = trace_chains(self, pass, &pilot, paths - pilot.paths as usize, &seen);
         (photons, pilot.stats + stats)
     }
-}
 
-impl Renderer<'_> {
     /// The fraction of pass `index`'s pilot paths that a visible point sees (what `auto`
     /// decides by).
     pub fn pilot_seen_fraction(&self, index: u64) -> f64 {
         let pass = self.pass_samples(index);
         let (points, _) = self.trace_visible_points(&pass);
         let seen = PointGrid::new(visible_points(&points), pass.radius);
-        let pilot = trace_pilot(self, &pass, 0..self.settings.photons_per_pass.div_ceil(PILOT_SHARE), &seen);
-        pilot.seen_paths.len() as f64 / pilot.paths as f64
+        trace_pilot(self, &pass, 0..self.settings.photons_per_pass.div_ceil(PILOT_SHARE), &seen)
+            .seen_fraction()
     }
-}
 
-impl Renderer<'_> {
     /// Where photon paths are drawn by visibility and the film is a window of the image: the
     /// whole image's eye pass, whose visible points decide which paths are seen (so that a
     /// render region holds exactly the whole render's pixels). `None` otherwise.
@@ -160,6 +157,12 @@ impl Pilot {
             counted_seen: 0,
             stats: PassStats::default(),
         }
+    }
+
+    /// The fraction of the paths that count toward the normalisation (its first round's) that
+    /// a visible point sees.
+    fn seen_fraction(&self) -> f64 {
+        self.counted_seen as f64 / self.counted_paths as f64
     }
 
     /// This pilot followed by `more` (the next paths, which do not count toward the
