@@ -576,12 +576,13 @@ def sun(elevation_deg, azimuth_deg, strength, angle_deg=0.5):
     return light
 
 
-def sunlit_room_scene(ground=20.0):
+def sunlit_room_scene(ground=20.0, closeup=False):
     """A closed room (4 x 4 x 2.5 m) on a large sunlit ground plane (`ground` m square), lit
     through one small window (1 x 1 m) by a low sun and a blue sky: the sun's patch falls on
     a table where a glass ball focuses it into a caustic. Nearly every photon from the sun and
     the sky lands outside, where the camera (inside) sees nothing: the visibility-driven photons'
-    scene (Hachisuka & Jensen 2011's sunlit room), built but not exported."""
+    scene (Hachisuka & Jensen 2011's sunlit room). `closeup` frames the glass ball and its
+    caustic instead of the room (the automatic radius's close-up)."""
     reset()
     white = material("Plaster", (0.75, 0.73, 0.7))
     plane("Ground", ground, (0, 0, 0), (0, 0, 0), material("Grass", (0.15, 0.3, 0.08)))
@@ -601,7 +602,40 @@ def sunlit_room_scene(ground=20.0):
     glass_sphere((0.0, 0.9, 0.9), 0.15, glass_material())
     sun(40.0, 0.0, 5.0)
     world((0.35, 0.5, 0.9), 0.6)
-    camera((1.3, -1.8, 1.5), (0.0, 0.55, 0.8), lens_mm=24.0)
+    if closeup:
+        camera((0.45, 0.2, 1.25), (0.0, 0.85, 0.8), lens_mm=35.0)
+    else:
+        camera((1.3, -1.8, 1.5), (0.0, 0.55, 0.8), lens_mm=24.0)
+    set_resolution(256, 192)
+
+
+def glass_in_hall_scene(size=24.0, height=6.0, lamps=8):
+    """A small glass ball on a small table in a large hall (`size` m square, `height` m high) lit
+    by `lamps` x `lamps` ceiling lamps facing down, seen close up: the camera sees about a metre
+    of the hall, which the lamps light all over (visibility-driven photons' second scene), built
+    for the benchmark, not exported."""
+    reset()
+    grey = material("Hall walls", (0.6, 0.6, 0.6))
+    plane("Floor", size, (0, 0, 0), (0, 0, 0), material("Floor", (0.45, 0.4, 0.35)))
+    plane("Ceiling", size, (0, 0, height), (math.pi, 0, 0), grey)
+    for name, location, rotation in (("WallN", (0, size / 2, height / 2), (math.pi / 2, 0, 0)),
+                                     ("WallS", (0, -size / 2, height / 2), (-math.pi / 2, 0, 0)),
+                                     ("WallW", (-size / 2, 0, height / 2), (0, math.pi / 2, 0)),
+                                     ("WallE", (size / 2, 0, height / 2), (0, -math.pi / 2, 0))):
+        bpy.ops.mesh.primitive_plane_add(size=1, location=location, rotation=rotation)
+        wall = bpy.context.object
+        wall.name = name
+        wall.scale = (size, height, 1) if name in ("WallN", "WallS") else (height, size, 1)
+        wall.data.materials.append(grey)
+    lamp = material("Lamp", (0.0, 0.0, 0.0), emission=(1.0, 0.85, 0.7), emission_strength=40.0)
+    pitch = size / lamps
+    quads = [((-size / 2 + (i + 0.5) * pitch, -size / 2 + (j + 0.5) * pitch, height - 0.01), (0.4, 0, 0),
+              (0, -0.4, 0), 0) for i in range(lamps) for j in range(lamps)]
+    emissive_quads("Lamps", quads, [lamp])
+    table = (2.0, 1.5)
+    block("Table", (0.8, 0.8, 0.75), (*table, 0.375), 0.0, material("Table top", (0.8, 0.8, 0.8)))
+    glass_sphere((table[0], table[1], 0.83), 0.08, glass_material())
+    camera((table[0] + 0.55, table[1] - 0.85, 1.3), (table[0], table[1], 0.78), lens_mm=50.0)
     set_resolution(256, 192)
 
 

@@ -149,6 +149,25 @@ impl Camera {
         }
     }
 
+    /// How large the film is where it sees `p`: the square root of the area the whole image
+    /// covers on the plane through `p` facing the camera (at `p`'s distance for a panorama), in
+    /// scene units; `None` behind the camera. A pixel's footprint there is this over the square
+    /// root of the image's pixels.
+    pub fn film_size_at(&self, p: Vec3, aspect: f32) -> Option<f32> {
+        let d = p - self.position;
+        let z = d.dot(self.forward);
+        match self.projection {
+            Projection::Perspective { tan_half_fov_y } => {
+                (z > 0.0).then(|| 2.0 * z * tan_half_fov_y * aspect.sqrt())
+            }
+            Projection::Orthographic { half_height } => (z > 0.0).then(|| 2.0 * half_height * aspect.sqrt()),
+            Projection::Equirectangular { longitude, latitude } => {
+                let solid = ((longitude[1] - longitude[0]) * (latitude[1] - latitude[0])).abs();
+                Some(d.length() * solid.sqrt())
+            }
+        }
+    }
+
     /// Where the point `p` appears on the film (the inverse of [`Camera::ray`]), or `None`
     /// behind the camera.
     pub fn project(&self, p: Vec3, aspect: f32) -> Option<Vec2> {
@@ -208,6 +227,30 @@ mod tests {
             let (origin, direction) = camera.ray(film, 1.5);
             let back = camera.project(origin + 5.0 * direction, 1.5).unwrap();
             assert!((back - film).length() < 1e-5, "{projection:?}: {back}");
+        }
+    }
+
+    #[test]
+    fn the_film_size_at_a_point_is_the_root_of_the_area_the_image_covers_there() {
+        let world = Mat4::from_rotation_y(0.3) * Mat4::from_translation(Vec3::new(1.0, 2.0, 3.0));
+        let aspect = 1.5;
+        for projection in
+            [Projection::Perspective { tan_half_fov_y: 0.4 }, Projection::Orthographic { half_height: 2.0 }]
+        {
+            let camera = Camera::from_node(world, projection, Vec2::new(0.1, -0.05));
+            // The image's corners on the plane 5 units ahead.
+            let on_plane = |film: Vec2| {
+                let (origin, direction) = camera.ray(film, aspect);
+                let depth = 5.0 - (origin - camera.position).dot(camera.forward);
+                origin + direction * (depth / direction.dot(camera.forward))
+            };
+            let corner = on_plane(Vec2::ZERO);
+            let width = (on_plane(Vec2::X) - corner).length();
+            let height = (on_plane(Vec2::Y) - corner).length();
+            let p = on_plane(Vec2::new(0.3, 0.8));
+            let size = camera.film_size_at(p, aspect).unwrap();
+            assert!((size - (width * height).sqrt()).abs() < 1e-4 * size, "{projection:?}: {size}");
+            assert_eq!(camera.film_size_at(camera.position - 5.0 * camera.forward, aspect), None);
         }
     }
 

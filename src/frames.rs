@@ -27,6 +27,7 @@ use rayon::prelude::*;
 
 use crate::sppm::{
     run_shared_pass, Crop, FrameEstimates, PassSamples, PassStats, PixelEstimate, Renderer, SppmSettings,
+    ViewMeasure,
 };
 
 /// Set when the user asks the render to stop (Ctrl-C, SIGTERM): the pass in flight finishes,
@@ -205,18 +206,18 @@ pub fn resolution(settings: &RenderSettings, description: &Description) -> [u32;
     })
 }
 
-/// Photons per pass at which the default first radius is 2% of the scene's diameter.
+/// Photons per pass at which the scene-based first radius is 2% of the scene's diameter.
 const DEFAULT_RADIUS_PHOTONS: f64 = 49_152.0;
 
-/// The first pass's radius when none is given: 2% of the scene's bounding diameter (the benchmark
-/// against Cycles, at 256x192 with 49,152 photons a pass, measured half the error of 1% at every
-/// time budget, on both of its boxes), shrunk as `photons^(-1/6)` above that many photons a pass.
-/// With `N` photons a pass, a pass's variance goes as `1 / (N r^2)` and its bias as `r^2`, so the
-/// radius of least error goes as `N^(-1/6)`; a fixed radius would make the gather, which grows
-/// with pixels times photons within reach, take 89% of a full-HD pass with a million photons.
-pub fn default_radius(scene: &Scene, photons_per_pass: usize) -> f64 {
-    let shrink = (DEFAULT_RADIUS_PHOTONS / photons_per_pass.max(1) as f64).powf(1.0 / 6.0).min(1.0);
-    f64::from(scene.bounding_sphere().radius) * DEFAULT_RADIUS_FRACTION * shrink
+/// The first pass's radius when none is given: from the view where the camera sees surfaces
+/// ([`ViewMeasure::radius`]); where it sees none, 2% of the scene's bounding diameter, shrunk as
+/// `photons^(-1/6)` above `DEFAULT_RADIUS_PHOTONS` photons a pass (the radius of least error
+/// goes as the photons' density to the -1/6).
+pub fn default_radius(scene: &Scene, view: Option<ViewMeasure>, photons_per_pass: usize) -> f64 {
+    view.map(|v| v.radius()).unwrap_or_else(|| {
+        let shrink = (DEFAULT_RADIUS_PHOTONS / photons_per_pass.max(1) as f64).powf(1.0 / 6.0).min(1.0);
+        f64::from(scene.bounding_sphere().radius) * DEFAULT_RADIUS_FRACTION * shrink
+    })
 }
 
 /// How a render of `settings` draws its photon paths: `auto` is uniform where anything in the
@@ -389,7 +390,8 @@ impl Shot {
             crop,
             photons_per_pass,
             alpha: settings.alpha,
-            initial_radius: settings.radius.unwrap_or_else(|| default_radius(&first, photons_per_pass)),
+            // Measured on the first frame's pose below when not given.
+            initial_radius: settings.radius.unwrap_or(0.0),
             seed: settings.seed,
             fixed_wavelength_nm: settings.wavelength_nm,
             light_sampling: settings.light_sampling,
@@ -398,14 +400,32 @@ impl Shot {
         let still_accel =
             || Accel::new(Arc::clone(&fixed_bvh), Bvh::empty()).with_instances(instanced_bvh.clone());
         let still = (!prepared.has_motion()).then(|| (first, still_accel()));
-        let identity = match settings.partial_passes {
-            Some(_) => Some((
-                partial::scene_sha256(&settings.scene)?,
-                fingerprint(&sppm, shutter, &prepared, settings),
-            )),
-            None => None,
+        let mut shot = Shot { prepared, fixed_bvh, instanced_bvh, still, shutter, sppm, identity: None };
+        if settings.radius.is_none() {
+            shot.sppm.initial_radius = shot.default_radius(range.start);
+        }
+        if settings.partial_passes.is_some() {
+            let fingerprint = fingerprint(&shot.sppm, shutter, &shot.prepared, settings);
+            shot.identity = Some((partial::scene_sha256(&settings.scene)?, fingerprint));
+        }
+        Ok(shot)
+    }
+
+    /// The first radius when none is given, measured on the pose at `time` (the first frame's:
+    /// frames rendered in other ranges, whose first frames differ, may get another radius, which
+    /// `caustic merge` names; `--radius` makes it one).
+    fn default_radius(&self, time: f32) -> f64 {
+        let radius = |scene: &Scene, accel: &Accel| {
+            let view = Renderer::new(scene, accel, self.sppm.clone()).measure_view();
+            default_radius(scene, view, self.sppm.photons_per_pass)
         };
-        Ok(Shot { prepared, fixed_bvh, instanced_bvh, still, shutter, sppm, identity })
+        match &self.still {
+            Some((scene, accel)) => radius(scene, accel),
+            None => {
+                let (scene, accel) = self.pose(time);
+                radius(&scene, &accel)
+            }
+        }
     }
 
     /// The SPPM settings every pass uses.

@@ -115,7 +115,8 @@ pub fn report(settings: &RenderSettings) -> Result<Value, String> {
 fn photons(settings: &RenderSettings, shot: &Shot, animated: bool, reuse: bool) -> Value {
     let sppm = shot.sppm();
     let (scene, accel) = shot.pose(0.0);
-    let pilot_seen = Renderer::new(&scene, &accel, sppm.clone()).pilot_seen_fraction(0);
+    let renderer = Renderer::new(&scene, &accel, sppm.clone());
+    let pilot_seen = renderer.pilot_seen_fraction(0);
     let auto_uses = match animated || pilot_seen >= AUTO_VISIBLE_BELOW {
         true => "uniform",
         false => "visible",
@@ -132,5 +133,10 @@ fn photons(settings: &RenderSettings, shot: &Shot, animated: bool, reuse: bool) 
         "frames": shared,
         "per_pass": sppm.photons_per_pass,
         "initial_radius": sppm.initial_radius,
+        "radius_from": match (settings.radius, renderer.measure_view()) {
+            (Some(_), _) => json!("--radius"),
+            (None, Some(view)) => json!({"view_size": view.size, "photons_per_view": view.photons_per_view}),
+            (None, None) => json!("the scene's size (the camera sees no surface)"),
+        },
     })
 }

@@ -5,6 +5,7 @@
 //! independent (Knaus & Zwicker 2011), so any pass range can be rendered anywhere and summed.
 
 mod direct;
+mod footprint;
 mod gather;
 mod grid;
 mod guides;
@@ -19,6 +20,7 @@ mod see_through;
 mod shared;
 mod visible;
 
+pub use footprint::ViewMeasure;
 pub use guides::Guide;
 pub use photon_sampling::AUTO_VISIBLE_BELOW;
 pub use photons::Photon;

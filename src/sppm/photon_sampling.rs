@@ -134,8 +134,8 @@ fn concatenate(chunks: Vec<(Vec<Photon>, PassStats)>) -> (Vec<Photon>, PassStats
 }
 
 /// The pilot: a pass's first uniform paths, their photons, and which of them are seen.
-struct Pilot {
-    photons: Vec<Photon>,
+pub(super) struct Pilot {
+    pub(super) photons: Vec<Photon>,
     /// The indices of the paths seen, in order.
     seen_paths: Vec<u64>,
     /// How many paths the pilot traced.
@@ -161,7 +161,7 @@ impl Pilot {
 
     /// The fraction of the paths that count toward the normalisation (its first round's) that
     /// a visible point sees.
-    fn seen_fraction(&self) -> f64 {
+    pub(super) fn seen_fraction(&self) -> f64 {
         self.counted_seen as f64 / self.counted_paths as f64
     }
 
@@ -176,7 +176,7 @@ impl Pilot {
 }
 
 /// The uniform paths `paths` of `pass` as a pilot.
-fn trace_pilot(
+pub(super) fn trace_pilot(
     renderer: &Renderer,
     pass: &PassSamples,
     paths: std::ops::Range<usize>,

@@ -73,6 +73,15 @@ impl PointGrid {
         });
     }
 
+    /// How many visible points lie within the radius of `p`.
+    pub fn count_near(&self, p: Vec3) -> usize {
+        let mut count = 0;
+        self.grid.for_each_near(p, |range| {
+            count += self.positions[range].iter().filter(|q| q.distance_squared(p) < self.reach2).count()
+        });
+        count
+    }
+
     /// Whether some visible point lies within the radius of `p`.
     pub fn reaches(&self, p: Vec3) -> bool {
         let mut found = false;

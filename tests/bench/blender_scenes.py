@@ -29,6 +29,12 @@ SCENES = {
     # A room lit through a small window by the sun and sky, inside a large ground plane (the
     # visibility-driven photons' scene).
     "sunlit_room": make_scenes.sunlit_room_scene,
+    # The same room seen close up: the glass ball and its caustic fill the frame (the automatic
+    # radius's close-up, beside sunlit_room's wide shot).
+    "sunlit_closeup": lambda: make_scenes.sunlit_room_scene(closeup=True),
+    # A small glass ball in a large hall lit by 64 ceiling lamps, seen close up (the
+    # visibility-driven photons' second scene).
+    "glass_in_hall": make_scenes.glass_in_hall_scene,
 }
 
 
