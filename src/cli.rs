@@ -80,6 +80,15 @@ pub struct InfoArgs {
     /// Frames the render would cover: 7, 1-48, 1-48:2 or 1,5,9.
     #[arg(long, value_name = "SPEC", value_parser = parse_frames, default_value = "1")]
     frames: FrameList,
+    /// Image size WxH the render would have (shapes the first radius).
+    #[arg(long, value_name = "WxH", value_parser = parse_resolution)]
+    resolution: Option<[u32; 2]>,
+    /// Photon paths per pass the render would trace (shapes the first radius).
+    #[arg(long, value_name = "N", value_parser = at_least_one)]
+    photons: Option<u64>,
+    /// How the render would draw photon paths (shapes the first radius).
+    #[arg(long, value_enum, default_value_t = PhotonSampling::Uniform)]
+    photon_sampling: PhotonSampling,
 }
 
 /// Flags of `caustic render`.
@@ -102,8 +111,8 @@ pub struct RenderArgs {
     /// Radius reduction alpha of Knaus & Zwicker, in (0, 1).
     #[arg(long, value_name = "A", default_value_t = 2.0 / 3.0, allow_negative_numbers = true, value_parser = unit_interval)]
     alpha: f64,
-    /// First-pass gather radius in scene units (default: 2% of the scene's bounding diameter, times
-    /// (49152 / photons per pass)^(1/6) above 49,152 photons a pass).
+    /// First-pass gather radius in scene units (default: from the view where the camera sees
+    /// surfaces and the photons a pass lands there; `caustic info` prints it and what it comes from).
     #[arg(long, value_name = "R", allow_negative_numbers = true, value_parser = positive_f64)]
     radius: Option<f64>,
     /// Image size WxH (default: the scene's, else 640 wide at the camera's aspect).
@@ -400,8 +409,13 @@ pub fn run(cli: Cli) -> Result<(), String> {
         }
         Command::Info(args) => {
             let scene = args.scene.unwrap_or_else(|| PathBuf::from(DEMO_SCENE));
-            let settings =
-                RenderSettings { frames: args.frames.0, ..RenderSettings::new(&scene, Path::new(".")) };
+            let settings = RenderSettings {
+                frames: args.frames.0,
+                resolution: args.resolution,
+                photons: args.photons.map(|n| n as usize),
+                photon_sampling: args.photon_sampling,
+                ..RenderSettings::new(&scene, Path::new("."))
+            };
             let report = crate::info::report(&settings)?;
             println!("{}", serde_json::to_string_pretty(&report).expect("JSON"));
             Ok(())

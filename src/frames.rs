@@ -27,7 +27,7 @@ use rayon::prelude::*;
 
 use crate::sppm::{
     run_shared_pass, Crop, FrameEstimates, PassSamples, PassStats, PixelEstimate, Renderer, SppmSettings,
-    ViewMeasure,
+    ViewMeasure, AUTO_VISIBLE_BELOW,
 };
 
 /// Set when the user asks the render to stop (Ctrl-C, SIGTERM): the pass in flight finishes,
@@ -359,6 +359,8 @@ pub struct Shot {
     sppm: SppmSettings,
     /// For partial results: the scene's SHA-256 and the settings that shape every pass.
     identity: Option<(String, serde_json::Value)>,
+    /// The first pose's view, where the first radius was measured from it.
+    view: Option<ViewMeasure>,
 }
 
 impl Shot {
@@ -400,10 +402,9 @@ impl Shot {
         let still_accel =
             || Accel::new(Arc::clone(&fixed_bvh), Bvh::empty()).with_instances(instanced_bvh.clone());
         let still = (!prepared.has_motion()).then(|| (first, still_accel()));
-        let mut shot = Shot { prepared, fixed_bvh, instanced_bvh, still, shutter, sppm, identity: None };
-        if settings.radius.is_none() {
-            shot.sppm.initial_radius = shot.default_radius(range.start);
-        }
+        let mut shot =
+            Shot { prepared, fixed_bvh, instanced_bvh, still, shutter, sppm, identity: None, view: None };
+        shot.measure_first_pose(range.start, settings.radius.is_none());
         if settings.partial_passes.is_some() {
             let fingerprint = fingerprint(&shot.sppm, shutter, &shot.prepared, settings);
             shot.identity = Some((partial::scene_sha256(&settings.scene)?, fingerprint));
@@ -411,21 +412,35 @@ impl Shot {
         Ok(shot)
     }
 
-    /// The first radius when none is given, measured on the pose at `time` (the first frame's:
-    /// frames rendered in other ranges, whose first frames differ, may get another radius, which
-    /// `caustic merge` names; `--radius` makes it one).
-    fn default_radius(&self, time: f32) -> f64 {
-        let radius = |scene: &Scene, accel: &Accel| {
-            let view = Renderer::new(scene, accel, self.sppm.clone()).measure_view();
-            default_radius(scene, view, self.sppm.photons_per_pass)
-        };
-        match &self.still {
-            Some((scene, accel)) => radius(scene, accel),
+    /// Settles what is measured on the first frame's pose, at `time`: the first radius when
+    /// `default_radius` (none was given), then whether `auto` photon sampling needs chains at all
+    /// (where pass 0's pilot finds a quarter of its paths seen or more, every pass is uniform, and
+    /// pays nothing for a pilot). Frames rendered in other ranges, whose first frames differ, may
+    /// get another radius, which `caustic merge` names; `--radius` makes it one.
+    fn measure_first_pose(&mut self, time: f32, default_radius: bool) {
+        let owned;
+        let (scene, accel) = match &self.still {
+            Some((scene, accel)) => (scene, accel),
             None => {
-                let (scene, accel) = self.pose(time);
-                radius(&scene, &accel)
+                owned = self.pose(time);
+                (&owned.0, &owned.1)
             }
+        };
+        if default_radius {
+            self.view = Renderer::new(scene, accel, self.sppm.clone()).measure_view();
+            self.sppm.initial_radius = self::default_radius(scene, self.view, self.sppm.photons_per_pass);
         }
+        if self.sppm.photon_sampling == PhotonSampling::Auto
+            && Renderer::new(scene, accel, self.sppm.clone()).pilot_seen_fraction(0) >= AUTO_VISIBLE_BELOW
+        {
+            self.sppm.photon_sampling = PhotonSampling::Uniform;
+        }
+    }
+
+    /// The first pose's view, where the first radius was measured from it (`None` where the
+    /// radius was given or the camera sees no surface).
+    pub fn view(&self) -> Option<ViewMeasure> {
+        self.view
     }
 
     /// The SPPM settings every pass uses.

@@ -115,8 +115,7 @@ pub fn report(settings: &RenderSettings) -> Result<Value, String> {
 fn photons(settings: &RenderSettings, shot: &Shot, animated: bool, reuse: bool) -> Value {
     let sppm = shot.sppm();
     let (scene, accel) = shot.pose(0.0);
-    let renderer = Renderer::new(&scene, &accel, sppm.clone());
-    let pilot_seen = renderer.pilot_seen_fraction(0);
+    let pilot_seen = Renderer::new(&scene, &accel, sppm.clone()).pilot_seen_fraction(0);
     let auto_uses = match animated || pilot_seen >= AUTO_VISIBLE_BELOW {
         true => "uniform",
         false => "visible",
@@ -126,14 +125,14 @@ fn photons(settings: &RenderSettings, shot: &Shot, animated: bool, reuse: bool) 
         false => "each frame's photons are drawn by its sampling",
     };
     json!({
-        "sampling": format!("{:?}", sppm.photon_sampling).to_lowercase(),
-        "auto_rule": format!("per pass: visible where fewer than {AUTO_VISIBLE_BELOW} of a uniform pilot's paths reach a visible point, else uniform; uniform where anything is animated"),
+        "sampling": format!("{:?}", settings.photon_sampling).to_lowercase(),
+        "auto_rule": format!("uniform where anything is animated, or where fewer than {AUTO_VISIBLE_BELOW} of pass 0's uniform pilot paths reach a visible point; else per pass, visible where fewer than that of its pilot's paths do"),
         "pilot_seen_fraction_pass_0": pilot_seen,
         "auto_uses_on_pass_0": auto_uses,
         "frames": shared,
         "per_pass": sppm.photons_per_pass,
         "initial_radius": sppm.initial_radius,
-        "radius_from": match (settings.radius, renderer.measure_view()) {
+        "radius_from": match (settings.radius, shot.view()) {
             (Some(_), _) => json!("--radius"),
             (None, Some(view)) => json!({"view_size": view.size, "photons_per_view": view.photons_per_view}),
             (None, None) => json!("the scene's size (the camera sees no surface)"),

@@ -10,6 +10,11 @@ import render_in_blender  # noqa: E402  (sets a temporary HOME, imports bpy and 
 import bpy  # noqa: E402
 
 make_scenes = render_in_blender.make_scenes
+def sunlit_closeup_scene():
+    """The sunlit room seen close up: the glass ball and its caustic fill the frame."""
+    make_scenes.sunlit_room_scene(closeup=True)
+
+
 def frosted_glass_scene():
     """The demo with its sphere frosted (roughness 0.2): a soft caustic."""
     make_scenes.cornell_glass_scene(roughness=0.2)
@@ -31,7 +36,7 @@ SCENES = {
     "sunlit_room": make_scenes.sunlit_room_scene,
     # The same room seen close up: the glass ball and its caustic fill the frame (the automatic
     # radius's close-up, beside sunlit_room's wide shot).
-    "sunlit_closeup": lambda: make_scenes.sunlit_room_scene(closeup=True),
+    "sunlit_closeup": sunlit_closeup_scene,
     # A small glass ball in a large hall lit by 64 ceiling lamps, seen close up (the
     # visibility-driven photons' second scene).
     "glass_in_hall": make_scenes.glass_in_hall_scene,
