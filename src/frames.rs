@@ -19,7 +19,7 @@ use crate::partial;
 use crate::progress::Progress;
 pub use crate::progress::ProgressStyle;
 use crate::sampling::pass_time_sample;
-use crate::scene::description::{LensSettings, Shutter};
+use crate::scene::description::{Lens, LensSettings, Shutter};
 use crate::scene::pose::{lens, Motion};
 use crate::scene::{Description, Prepared, Scene, TimeRange, DEFAULT_RADIUS_FRACTION};
 pub use crate::sppm::{LightSampling, PhotonSampling};
@@ -359,7 +359,7 @@ pub struct Shot {
     sppm: SppmSettings,
     /// For partial results: the scene's SHA-256 and the settings that shape every pass.
     identity: Option<(String, serde_json::Value)>,
-    /// The first pose's view, where the first radius was measured from it.
+    /// The view the first radius was measured from.
     view: Option<ViewMeasure>,
 }
 
@@ -404,7 +404,7 @@ impl Shot {
         let still = (!prepared.has_motion()).then(|| (first, still_accel()));
         let mut shot =
             Shot { prepared, fixed_bvh, instanced_bvh, still, shutter, sppm, identity: None, view: None };
-        shot.measure_first_pose(range.start, settings.radius.is_none());
+        shot.settle_from_view(lens, settings.radius.is_none());
         if settings.partial_passes.is_some() {
             let fingerprint = fingerprint(&shot.sppm, shutter, &shot.prepared, settings);
             shot.identity = Some((partial::scene_sha256(&settings.scene)?, fingerprint));
@@ -412,33 +412,45 @@ impl Shot {
         Ok(shot)
     }
 
-    /// Settles what is measured on the first frame's pose, at `time`: the first radius when
-    /// `default_radius` (none was given), then whether `auto` photon sampling needs chains at all
-    /// (where pass 0's pilot finds a quarter of its paths seen or more, every pass is uniform, and
-    /// pays nothing for a pilot). Frames rendered in other ranges, whose first frames differ, may
-    /// get another radius, which `caustic merge` names; `--radius` makes it one.
-    fn measure_first_pose(&mut self, time: f32, default_radius: bool) {
-        let owned;
-        let (scene, accel) = match &self.still {
-            Some((scene, accel)) => (scene, accel),
-            None => {
-                owned = self.pose(time);
-                (&owned.0, &owned.1)
-            }
-        };
+    /// Settles what is measured on the scene's view: the first radius when `default_radius`
+    /// (none was given), then whether `auto` photon sampling needs chains at all (where pass 0's
+    /// pilot finds a quarter of its paths seen or more, every pass is uniform, and pays nothing
+    /// for a pilot). An animated scene's view is measured at frame 1 (Blender's first), prepared
+    /// for that instant alone: every frame range, a farm task's or a whole shot's, gets the same
+    /// radius.
+    fn settle_from_view(&mut self, lens: Option<Lens>, default_radius: bool) {
+        let description = Arc::clone(&self.prepared.description);
         if default_radius {
-            self.view = Renderer::new(scene, accel, self.sppm.clone()).measure_view();
-            self.sppm.initial_radius = self::default_radius(scene, self.view, self.sppm.photons_per_pass);
+            let measure = |scene: &Scene, accel: &Accel| {
+                let view = Renderer::new(scene, accel, self.sppm.clone()).measure_view();
+                (view, self::default_radius(scene, view, self.sppm.photons_per_pass))
+            };
+            let (view, radius) = match &self.still {
+                Some((scene, accel)) if !is_animated(&description) => measure(scene, accel),
+                _ => {
+                    let time = seconds(1.0 + self.shutter.open, description.fps);
+                    let instant =
+                        Prepared::with_lens(description, TimeRange { start: time, end: time }, lens);
+                    let accel = Accel::new(Arc::new(instant.fixed_bvh()), Bvh::empty())
+                        .with_instances(instant.instanced_bvh());
+                    measure(&instant.pose(time), &accel)
+                }
+            };
+            (self.view, self.sppm.initial_radius) = (view, radius);
         }
-        if self.sppm.photon_sampling == PhotonSampling::Auto
-            && Renderer::new(scene, accel, self.sppm.clone()).pilot_seen_fraction(0) >= AUTO_VISIBLE_BELOW
-        {
+        let mostly_seen = match (&self.still, self.sppm.photon_sampling) {
+            (Some((scene, accel)), PhotonSampling::Auto) => {
+                Renderer::new(scene, accel, self.sppm.clone()).pilot_seen_fraction(0) >= AUTO_VISIBLE_BELOW
+            }
+            _ => false,
+        };
+        if mostly_seen {
             self.sppm.photon_sampling = PhotonSampling::Uniform;
         }
     }
 
-    /// The first pose's view, where the first radius was measured from it (`None` where the
-    /// radius was given or the camera sees no surface).
+    /// The view the first radius was measured from (`None` where the radius was given or the
+    /// camera sees no surface).
     pub fn view(&self) -> Option<ViewMeasure> {
         self.view
     }

@@ -118,3 +118,21 @@ fn a_render_region_gets_the_whole_renders_radius() {
     };
     assert_eq!(radius(None), radius(Some([3, 5, 10, 7])));
 }
+
+/// An animated scene's view is measured at frame 1 whatever frames a render covers: a farm task
+/// rendering frame 5 alone and a render of frames 1-10 give frame 5 the same radius, so their
+/// passes merge.
+#[test]
+fn every_frame_range_of_an_animated_shot_gets_the_same_radius() {
+    let dir = tempfile::tempdir().unwrap();
+    let radius = |frames: Vec<i32>| {
+        let settings =
+            RenderSettings { frames, ..settings(&bundled_scene("cornell_animated.gltf"), dir.path(), 1) };
+        let description = Arc::new(load_description(&settings).unwrap());
+        let shot = Shot::new(&settings, description).unwrap();
+        assert!(shot.view().is_some(), "the camera sees the box");
+        shot.sppm().initial_radius
+    };
+    assert_eq!(radius(vec![5]), radius((1..=10).collect()));
+    assert_eq!(radius(vec![5]), radius(vec![20, 21]));
+}
