@@ -26,7 +26,10 @@ Writes scenes/<name>.gltf and scenes/<name>.bin:
   and a blue sky, a glass ball on a table in the sun's patch (visibility-driven photons' scene:
   about 0.1% of uniform photon paths reach a point the camera sees);
 - night_city (built for the benchmark, tests/bench/blender_scenes.py, not exported here): a city
-  at night seen from above, 928 street lamps and 1485 lit windows (the light tree's second scene).
+  at night seen from above, 928 street lamps and 1485 lit windows (the light tree's second scene);
+- glass_in_hall (built for the benchmark, not exported here): a small glass ball on a table in a
+  24 m hall lit by 64 ceiling lamps, seen close up (visibility-driven photons' second scene); the
+  sunlit room's close-up (`sunlit_room_scene(closeup=True)`) is built for the benchmark too.
 
 Blender's exporter drops area lights and the render resolution, so they travel as `caustic`
 custom properties, which the exporter writes as glTF extras (see docs/extras.md). The gems and the

@@ -141,9 +141,9 @@ pub struct RenderArgs {
     light_sampling: LightSampling,
     /// How photon paths are drawn: uniformly from the lights, or by Markov chains that keep to
     /// the paths some visible point sees (Hachisuka & Jensen 2011: for a room lit through a
-    /// window, a small object in a large scene); auto chooses per pass, visible where a uniform
-    /// pilot finds fewer than a quarter of the paths seen (the demo box, at 40%, renders faster
-    /// uniformly), and uniform where anything in the scene is animated.
+    /// window, a small object in a large scene); auto is uniform where anything in the scene is
+    /// animated or where a uniform pilot of pass 0 finds a quarter of its paths seen or more (the
+    /// demo box, at 40%, renders faster uniformly), else chooses per pass by its own pilot.
     #[arg(long, value_enum, default_value_t = PhotonSampling::Uniform)]
     photon_sampling: PhotonSampling,
     /// Also write Cycles' Denoising Albedo and Denoising Normal passes (for Blender's Denoise

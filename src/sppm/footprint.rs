@@ -50,7 +50,7 @@ const MAX_VIEW_FRACTION: f64 = 0.2;
 /// (`tests/bench/radius_sweep.py --caustic-flags "--photon-sampling visible"`), the best radius
 /// of the sunlit room's close-up and wide shot (1/seen of 5,500 and 600) matched gains of about
 /// 5 and 11.
-const VISIBLE_GAIN: f64 = 8.0;
+const VISIBLE_GAIN: f64 = 16.0;
 
 /// What the first radius is chosen from.
 #[derive(Clone, Copy, Debug)]
