@@ -8,7 +8,8 @@
 //! `V` is the fraction of primary sample space whose paths are seen. Uniform paths estimate `V`
 //! (the normalisation, measured); Markov chains whose stationary distribution is uniform over
 //! the seen paths estimate the mean. A chain's move is accepted when its proposal is seen: a
-//! small step moves every coordinate by a symmetric amount (Kelemen et al. 2002); a large step draws a new uniform path (it also counts toward
+//! small step moves every coordinate but the light's choice by a symmetric amount (Kelemen et al.
+//! 2002); a large step draws a new uniform path (it also counts toward
 //! `V`). Each chain starts from a seen uniform path, a sample of the stationary distribution
 //! itself, so no start-up is discarded.
 //!
@@ -286,8 +287,15 @@ fn replay(renderer: &Renderer, pass: &PassSamples, k: u64) -> ChainState {
     ChainState { values, photons, steps: 0 }
 }
 
+/// The coordinate of a photon path's primary sample that chooses its light (the first that
+/// [`emit_photon`] reads; it chooses the light alone).
+const LIGHT_CHOICE: usize = 0;
+
 /// A proposed path's primary sample, drawn as the path reads it: new uniform numbers (a large
-/// step), or the coordinates of `base` (the chain's current sample) each moved by a small step.
+/// step), or the coordinates of `base` (the chain's current sample) each moved by a small step,
+/// but for the light's choice, which a small step keeps (a move of it would mostly cross to
+/// another light, among many lamps of a hall one whose path misses what the camera sees, and be
+/// refused; leaving it is a symmetric proposal too, and large steps still reach every light).
 /// Where the proposal reads past the end of `base`, `base` grows by a new uniform number first
 /// and the proposal reads it moved: `base` keeps it whether or not the proposal is accepted, as
 /// Kelemen et al.'s sampler keeps every coordinate it has made (drawing it anew at each proposal
@@ -309,8 +317,10 @@ impl Uniforms for Proposal<'_> {
                 if i == base.len() {
                     base.push(self.rng.next_1d());
                 }
-                let coordinate = base[i];
-                wrap_unit(coordinate, small_move(self.rng))
+                match i {
+                    LIGHT_CHOICE => base[i],
+                    _ => wrap_unit(base[i], small_move(self.rng)),
+                }
             }
         };
         self.values.push(u);
