@@ -392,7 +392,7 @@ impl Shot {
             crop,
             photons_per_pass,
             alpha: settings.alpha,
-            // Measured on the first frame's pose below when not given.
+            // Measured from the view below when not given.
             initial_radius: settings.radius.unwrap_or(0.0),
             seed: settings.seed,
             fixed_wavelength_nm: settings.wavelength_nm,

@@ -126,7 +126,7 @@ fn photons(settings: &RenderSettings, shot: &Shot, animated: bool, reuse: bool) 
     };
     json!({
         "sampling": format!("{:?}", settings.photon_sampling).to_lowercase(),
-        "auto_rule": format!("uniform where anything is animated, or where fewer than {AUTO_VISIBLE_BELOW} of pass 0's uniform pilot paths reach a visible point; else per pass, visible where fewer than that of its pilot's paths do"),
+        "auto_rule": format!("uniform where anything is animated, or where {AUTO_VISIBLE_BELOW} or more of pass 0's uniform pilot paths reach a visible point (no pass traces a pilot then); else per pass, visible where fewer than {AUTO_VISIBLE_BELOW} of its pilot's paths do"),
         "pilot_seen_fraction_pass_0": pilot_seen,
         "auto_uses_on_pass_0": auto_uses,
         "frames": shared,
