@@ -27,7 +27,7 @@ use rayon::prelude::*;
 
 use crate::sppm::{
     run_shared_pass, Crop, FrameEstimates, PassSamples, PassStats, PixelEstimate, Renderer, SppmSettings,
-    ViewMeasure, AUTO_VISIBLE_BELOW,
+    ViewMeasure,
 };
 
 /// Set when the user asks the render to stop (Ctrl-C, SIGTERM): the pass in flight finishes,
@@ -440,7 +440,7 @@ impl Shot {
         }
         let mostly_seen = match (&self.still, self.sppm.photon_sampling) {
             (Some((scene, accel)), PhotonSampling::Auto) => {
-                Renderer::new(scene, accel, self.sppm.clone()).pilot_seen_fraction(0) >= AUTO_VISIBLE_BELOW
+                Renderer::new(scene, accel, self.sppm.clone()).auto_at_load().1
             }
             _ => false,
         };

@@ -115,8 +115,8 @@ pub fn report(settings: &RenderSettings) -> Result<Value, String> {
 fn photons(settings: &RenderSettings, shot: &Shot, animated: bool, reuse: bool) -> Value {
     let sppm = shot.sppm();
     let (scene, accel) = shot.pose(0.0);
-    let pilot_seen = Renderer::new(&scene, &accel, sppm.clone()).pilot_seen_fraction(0);
-    let auto_uses = match animated || pilot_seen >= AUTO_VISIBLE_BELOW {
+    let (pilot_seen, settled_uniform) = Renderer::new(&scene, &accel, sppm.clone()).auto_at_load();
+    let auto_uses = match animated || settled_uniform {
         true => "uniform",
         false => "visible",
     };

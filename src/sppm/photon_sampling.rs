@@ -81,14 +81,17 @@ impl Renderer<'_> {
         (photons, pilot.stats + stats)
     }
 
-    /// The fraction of pass `index`'s pilot paths that a visible point sees (what `auto`
-    /// decides by).
-    pub fn pilot_seen_fraction(&self, index: u64) -> f64 {
-        let pass = self.pass_samples(index);
+    /// The fraction of pass 0's pilot paths that a visible point sees, and whether `auto` is
+    /// settled at load by it: where it is `AUTO_VISIBLE_BELOW` or more, every pass draws its
+    /// photons uniformly and traces no pilot.
+    pub fn auto_at_load(&self) -> (f64, bool) {
+        let pass = self.pass_samples(0);
         let (points, _) = self.trace_visible_points(&pass);
         let seen = PointGrid::new(visible_points(&points), pass.radius);
-        trace_pilot(self, &pass, 0..self.settings.photons_per_pass.div_ceil(PILOT_SHARE), &seen)
-            .seen_fraction()
+        let fraction =
+            trace_pilot(self, &pass, 0..self.settings.photons_per_pass.div_ceil(PILOT_SHARE), &seen)
+                .seen_fraction();
+        (fraction, fraction >= AUTO_VISIBLE_BELOW)
     }
 
     /// Where photon paths are drawn by visibility and the film is a window of the image: the
