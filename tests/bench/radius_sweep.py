@@ -12,7 +12,9 @@ reports as `initial_radius` and `per_pass`) and once for each factor times that 
 the largest budget with `--log` and `--reference`; the error (relative MSE of luminance against
 tests/bench/<scene>.exr, as vs_cycles.py measures it) at each budget is read from the log. Prints,
 per scene and budget, the error at every value, the best, and the default's error over the
-best's; writes OUT/results.json. References: `vs_cycles.py --make-reference PASSES --scenes ...`.
+best's, both above the reference's own error where references.json gives it (the floor every
+error measured against it shares); writes OUT/results.json. References: `vs_cycles.py
+--make-reference PASSES --scenes ...`.
 """
 import argparse
 import json
@@ -24,7 +26,8 @@ import tempfile
 HERE = pathlib.Path(__file__).resolve().parent
 sys.path.insert(0, str(HERE))
 
-from vs_cycles import BENCH_SEED, ROOT, caustic_curve, error_at, parse_resolution, render_caustic  # noqa: E402
+from vs_cycles import (BENCH_SEED, ROOT, above_floor, caustic_curve, error_at, parse_resolution,  # noqa: E402
+                       reference_floor, render_caustic)
 from blender_scenes import SCENES, build, export  # noqa: E402
 
 
@@ -64,24 +67,29 @@ def sweep_scene(name, args):
         value = default * factor
         rows.append({"value": value, "factor": factor, "default": False,
                      "curve": error_curve(args, name, gltf, work, value)})
+    floor = reference_floor(name)
     for row in rows:
         row["errors"] = {str(b): error_at(row["curve"], b) for b in args.budgets}
-    return {"scene": name, "setting": args.setting, "flags": args.caustic_flags, "default": default, "rows": rows}
+        row["above_floor"] = {b: above_floor(e, floor) for b, e in row["errors"].items()}
+    return {"scene": name, "setting": args.setting, "flags": args.caustic_flags, "default": default,
+            "reference_floor": floor, "rows": rows}
 
 
 def print_table(result, budgets):
+    floor = result["reference_floor"]
+    # The errors compared: above the reference's own where it is known.
+    key = "errors" if floor is None else "above_floor"
     print(f"\n{result['scene']} {result['flags']}: relative MSE at equal CPU time, default {result['setting']} "
-          f"{result['default']:.4g}")
+          f"{result['default']:.4g}" + ("" if floor is None else f"; above the reference's own ({floor:.3g})"))
     print(f"{result['setting']:>9} {'x default':>9} " + " ".join(f"{f'{b:g} CPU s':>12}" for b in budgets))
     for row in sorted(result["rows"], key=lambda r: r["value"]):
-        errors = " ".join(f"{row['errors'][str(b)]:>12.4g}" if row["errors"][str(b)] else f"{'-':>12}"
-                          for b in budgets)
+        errors = " ".join(f"{row[key][str(b)]:>12.4g}" if row[key][str(b)] else f"{'-':>12}" for b in budgets)
         print(f"{row['value']:>9.4g} {row['factor']:>9.3g} {errors}" + ("   (default)" if row["default"] else ""))
     for b in budgets:
-        measured = [r for r in result["rows"] if r["errors"][str(b)]]
-        best = min(measured, key=lambda r: r["errors"][str(b)])
+        measured = [r for r in result["rows"] if r[key][str(b)]]
+        best = min(measured, key=lambda r: r[key][str(b)])
         default = next(r for r in measured if r["default"])
-        ratio = default["errors"][str(b)] / best["errors"][str(b)]
+        ratio = default[key][str(b)] / best[key][str(b)]
         result.setdefault("default_over_best", {})[str(b)] = ratio
         print(f"{b:g} CPU s: best {result['setting']} {best['value']:.4g} ({best['factor']:g}x the default); "
               f"the default's error is {ratio:.3f}x the best's")

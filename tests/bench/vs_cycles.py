@@ -16,11 +16,15 @@ budget; Caustic renders once for the largest budget with `--log` and `--referenc
 (after passes 1, 2, 4, ...) give its error along the way.
 
 The error is the relative MSE of luminance, mean of (Y - Y_ref)^2 / (Y_ref^2 + f^2), f = 1% of
-the reference's mean (`caustic compare`), against tests/bench/<scene>.exr: a long Caustic render
-with another seed, whose provenance is in tests/bench/references.json (`--make-reference PASSES`
-writes both). Prints, per scene, both errors at each budget and the ratio of the time Caustic
-needs to reach Cycles' error to Cycles' time; writes OUT/results.json, OUT/error_vs_time.svg and
-per scene OUT/<scene>/sheet.png (Cycles at each budget above; Caustic below, with the reference).
+the reference's mean (`caustic compare`), against tests/bench/<scene>.exr: the mean of two long
+Caustic renders with other seeds, whose provenance is in tests/bench/references.json
+(`--make-reference PASSES` writes both, each half of PASSES). A reference's own noise adds to every
+error measured against it: a quarter of the two halves' relative MSE against each other estimates
+it (`own_relative_mse`), and the tables give each error above that floor beside it (the floor
+cancels from nothing: a ratio of raw errors understates the gap between two renderers). Prints,
+per scene, both errors at each budget and the ratio of the time Caustic needs to reach Cycles'
+error to Cycles' time; writes OUT/results.json, OUT/error_vs_time.svg and per scene
+OUT/<scene>/sheet.png (Cycles at each budget above; Caustic below, with the reference).
 The spot scene (a point spot through glass, which Cycles cannot render) is rendered by both at
 each budget; its Caustic images and error bounds show it converging.
 """
@@ -43,7 +47,8 @@ sys.path.insert(0, str(HERE))
 from blender_scenes import SCENES, build, export  # noqa: E402  (imports bpy)
 import bpy  # noqa: E402
 
-REFERENCE_SEED = 777
+# The seeds of a reference's two halves.
+REFERENCE_SEEDS = (777, 778)
 BENCH_SEED = 1
 
 
@@ -117,15 +122,46 @@ def time_to_reach(curve, error):
     return None
 
 
+def mean_exr(paths, out):
+    """Writes the mean of the EXRs `paths` (their Combined colour) to `out`."""
+    import numpy as np
+    import OpenEXR
+    files = [OpenEXR.File(str(p), separate_channels=True) for p in paths]
+    header = files[0].header()
+    names = [n for n in files[0].channels() if n.startswith("Combined.")]
+    channels = {n: np.mean([f.channels()[n].pixels for f in files], axis=0, dtype=np.float64).astype(np.float32)
+                for n in names}
+    OpenEXR.File({"compression": header["compression"], "type": header["type"]}, channels).write(str(out))
+
+
+def reference_floor(name):
+    """The reference's own relative MSE (`own_relative_mse` in references.json), or None."""
+    provenance_path = HERE / "references.json"
+    provenance = json.loads(provenance_path.read_text()) if provenance_path.exists() else {}
+    return provenance.get(name, {}).get("own_relative_mse")
+
+
+def above_floor(error, floor):
+    """`error` less the reference's own (None where either is unknown)."""
+    return None if error is None or floor is None else error - floor
+
+
 def make_reference(binary, name, args):
-    """Renders tests/bench/<name>.exr with Caustic and records how in references.json."""
+    """Renders tests/bench/<name>.exr with Caustic, as the mean of two halves with other seeds, and
+    records how, and its own error from the halves' difference, in references.json."""
     scene = build(name, args.resolution, args.binary)
     work = pathlib.Path(tempfile.mkdtemp(prefix=f"caustic-ref-{name}-"))
     gltf = export(scene, work)
-    flags = ["--passes", str(args.make_reference), "--seed", str(REFERENCE_SEED), "--threads", str(args.threads),
-             *args.caustic_flags.split()]
-    wall, cpu = render_caustic(args.binary, gltf, work, flags)
-    (work / "frame_0001.exr").replace(HERE / f"{name}.exr")
+    halves, wall, cpu = [], 0.0, 0.0
+    for seed in REFERENCE_SEEDS:
+        flags = ["--passes", str(args.make_reference // 2), "--seed", str(seed), "--threads", str(args.threads),
+                 *args.caustic_flags.split()]
+        half_wall, half_cpu = render_caustic(args.binary, gltf, work / f"seed_{seed}", flags)
+        halves.append(work / f"seed_{seed}" / "frame_0001.exr")
+        wall, cpu = wall + half_wall, cpu + half_cpu
+    mean_exr(halves, HERE / f"{name}.exr")
+    # The halves differ by twice one half's error; their mean has half of one half's.
+    own = relative_mse(args.binary, halves[0], halves[1]) / 4
     commit = subprocess.run(["git", "-C", str(ROOT), "rev-parse", "--short", "HEAD"], capture_output=True,
                             text=True).stdout.strip()
     provenance_path = HERE / "references.json"
@@ -133,13 +169,16 @@ def make_reference(binary, name, args):
     provenance[name] = {
         "renderer": "caustic render (SPPM), this repository", "commit": commit,
         "scene": f"scenes/make_scenes.py {SCENES[name].__name__}(), exported by the add-on",
-        "resolution": list(args.resolution), "passes": args.make_reference, "seed": REFERENCE_SEED,
+        "resolution": list(args.resolution), "passes": args.make_reference,
+        "seeds": list(REFERENCE_SEEDS), "made_as": "the mean of two renders of half the passes, one per seed",
+        "own_relative_mse": own,
         "photons_per_pass": "one per pixel (default)", "threads": args.threads,
         "flags": args.caustic_flags,
         "wall_s": round(wall, 1), "cpu_s": round(cpu, 1), "date": datetime.date.today().isoformat(),
     }
     provenance_path.write_text(json.dumps(provenance, indent=2) + "\n")
-    print(f"{name}: reference of {args.make_reference} passes in {wall:.0f} s -> {HERE / (name + '.exr')}")
+    print(f"{name}: reference of {args.make_reference} passes in {wall:.0f} s, own relative MSE {own:.3g} "
+          f"-> {HERE / (name + '.exr')}")
 
 
 def caustic_flags(args, budget, log):
@@ -171,7 +210,7 @@ def bench_scene(name, args, out):
         error = relative_mse(args.binary, image, reference) if has_reference else None
         cycles.append({"budget_cpu_s": budget, "wall_s": wall, "cpu_s": cpu, "relative_mse": error})
         print(f"{name}: Cycles {budget:g} CPU s: call {wall:.1f} s wall, {cpu:.1f} s CPU, relative MSE {error}")
-    result = {"scene": name, "cycles": cycles}
+    result = {"scene": name, "cycles": cycles, "reference_floor": reference_floor(name)}
     last_log = folder / f"caustic_{max(args.budgets):g}s.log"
     lines = [json.loads(line) for line in last_log.read_text().splitlines() if line.strip()]
     result["caustic_bound"] = [(args.threads * l["elapsed_s"], l["error"]["mean"], l["passes"]) for l in lines]
@@ -208,13 +247,17 @@ def fmt(value, spec):
 
 
 def print_table(result):
-    print(f"\n{result['scene']}: relative MSE at equal CPU time")
-    print(f"{'CPU s':>7} {'Cycles':>10} {'Caustic':>10} {'Cycles/Caustic':>15} {'Caustic time to Cycles error':>30}")
+    floor = result["reference_floor"]
+    print(f"\n{result['scene']}: relative MSE at equal CPU time" +
+          ("" if floor is None else f" (the reference's own: {floor:.3e}; above it in brackets)"))
+    print(f"{'CPU s':>7} {'Cycles':>22} {'Caustic':>22} {'Cycles/Caustic':>15} {'Caustic time to Cycles error':>30}")
     for row in result["cycles"]:
         ours, theirs = row.get("caustic_relative_mse"), row["relative_mse"]
         ratio = theirs / ours if ours and theirs else None
         reach = row.get("caustic_time_to_cycles_error_s")
-        print(f"{row['budget_cpu_s']:>7g} {fmt(theirs, '.3e'):>10} {fmt(ours, '.3e'):>10} {fmt(ratio, '.1f'):>14}x "
+        both = [fmt(e, '.3e') + ("" if floor is None else f" ({fmt(above_floor(e, floor), '.2e')})")
+                for e in (theirs, ours)]
+        print(f"{row['budget_cpu_s']:>7g} {both[0]:>22} {both[1]:>22} {fmt(ratio, '.1f'):>14}x "
               f"{fmt(reach, '.2f'):>20} s ({fmt(row.get('time_ratio'), '.3f')}x)")
 
 
