@@ -17,11 +17,11 @@ budget; Caustic renders once for the largest budget with `--log` and `--referenc
 
 The error is the relative MSE of luminance, mean of (Y - Y_ref)^2 / (Y_ref^2 + f^2), f = 1% of
 the reference's mean (`caustic compare`), against tests/bench/<scene>.exr: the mean of two long
-Caustic renders with other seeds, whose provenance is in tests/bench/references.json
-(`--make-reference PASSES` writes both, each half of PASSES). A reference's own noise adds to every
-error measured against it: a quarter of the two halves' relative MSE against each other estimates
-it (`own_relative_mse`), and the tables give each error above that floor beside it (the floor
-cancels from nothing: a ratio of raw errors understates the gap between two renderers). Prints,
+Caustic renders with other seeds (older references: one render), whose provenance is in
+tests/bench/references.json (`--make-reference PASSES` writes both, each half of PASSES). A
+reference's own noise adds to every error measured against it: a quarter of the two halves'
+relative MSE against each other estimates it (`own_relative_mse`), and the tables give each error
+above that floor beside it (a ratio of raw errors understates the gap between two renderers). Prints,
 per scene, both errors at each budget and the ratio of the time Caustic needs to reach Cycles'
 error to Cycles' time; writes OUT/results.json, OUT/error_vs_time.svg and per scene
 OUT/<scene>/sheet.png (Cycles at each budget above; Caustic below, with the reference).
