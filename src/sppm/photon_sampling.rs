@@ -9,9 +9,9 @@
 //! (the normalisation, measured); Markov chains whose stationary distribution is uniform over
 //! the seen paths estimate the mean. A chain's move is accepted when its proposal is seen: a
 //! small step moves every coordinate but the light's choice by a symmetric amount (Kelemen et al.
-//! 2002); a large step draws a new uniform path (it also counts toward
-//! `V`). Each chain starts from a seen uniform path, a sample of the stationary distribution
-//! itself, so no start-up is discarded.
+//! 2002); a large step draws a new uniform path (it also counts toward `V`). Each chain starts
+//! from a seen uniform path, a sample of the stationary distribution itself, so no start-up is
+//! discarded.
 //!
 //! Every pass first traces a pilot: its first uniform paths, exactly as a uniform pass would.
 //! Under [`PhotonSampling::Auto`] a pass whose pilot is mostly seen traces the rest uniformly
