@@ -3,7 +3,8 @@
 //! Images are mapped as Blender maps an Environment Texture: the image's centre column faces
 //! Blender's +x (glTF +x), its top row is straight up, and `rotation_deg` turns it about the up
 //! axis. Each texel's colour becomes a smooth spectrum through [`IlluminantTable`]; directions are
-//! importance-sampled by texel luminance times sin(theta) (pbrt-v4's image infinite light).
+//! importance-sampled by luminance times sin(theta) (pbrt-v4's image infinite light), the luminance
+//! averaged over each texel's cell as the image is interpolated ([`cell_means`]).
 
 use std::f32::consts::PI;
 use std::path::Path;
@@ -98,6 +99,35 @@ impl World {
     }
 }
 
+/// The mean over each texel's cell of `values` (row by row, `width` across) as [`SpectrumImage`]
+/// interpolates them for [`Rows::Clamp`]: bilinearly between texel centres, wrapping across and
+/// holding the edge rows. Over its own cell a texel's tent integrates to 3/4 in each axis and each
+/// neighbour's to 1/8 (a held edge row counts as its own neighbour).
+///
+/// Directions are sampled in proportion to these means, not to the texels themselves: the radiance
+/// a sampled direction reads is interpolated, so a bright texel (a sun baked into a sky) lights the
+/// half of each neighbour's cell next to it, and sampling by texels would draw those directions as
+/// rarely as the dark neighbour, weighting them by thousands. The means keep radiance over density
+/// within 16 times its average for any image.
+fn cell_means(values: &[f64], width: usize) -> Vec<f64> {
+    let height = values.len() / width;
+    let tent = |a: f64, b: f64, c: f64| (a + 6.0 * b + c) / 8.0;
+    let across: Vec<f64> = (0..values.len())
+        .map(|i| {
+            let (row, x) = (i - i % width, i % width);
+            tent(values[row + (x + width - 1) % width], values[i], values[row + (x + 1) % width])
+        })
+        .collect();
+    (0..values.len())
+        .map(|i| {
+            let y = i / width;
+            let above = across[i - width * usize::from(y > 0)];
+            let below = across[i + width * usize::from(y + 1 < height)];
+            tent(above, across[i], below)
+        })
+        .collect()
+}
+
 /// Polar angle from up and the image's horizontal coordinate of direction `dir` (glTF, y up).
 fn direction_to_image(dir: Vec3, rotation: f32) -> Vec2 {
     // Blender's axes: x = glTF x, y = -glTF z, z = glTF y.
@@ -120,11 +150,12 @@ impl EnvironmentMap {
     fn new(width: usize, height: usize, pixels: &[Vec3], rotation: f32) -> Self {
         let table = IlluminantTable::get();
         let texels: Vec<RgbSpectrum> = pixels.iter().map(|&rgb| table.illuminant(rgb)).collect();
-        let luminance = |p: Vec3| f64::from(0.2126 * p.x + 0.7152 * p.y + 0.0722 * p.z);
-        let weights: Vec<f64> = pixels
-            .iter()
+        let luminance: Vec<f64> =
+            pixels.iter().map(|p| f64::from(0.2126 * p.x + 0.7152 * p.y + 0.0722 * p.z)).collect();
+        let weights: Vec<f64> = cell_means(&luminance, width)
+            .into_iter()
             .enumerate()
-            .map(|(i, &p)| luminance(p) * (PI * ((i / width) as f32 + 0.5) / height as f32).sin() as f64)
+            .map(|(i, l)| l * (PI * ((i / width) as f32 + 0.5) / height as f32).sin() as f64)
             .collect();
         let texel_solid_angle = 2.0 * std::f64::consts::PI * std::f64::consts::PI / (width * height) as f64;
         let luminance_over_sphere = weights.iter().sum::<f64>() * texel_solid_angle;
@@ -191,5 +222,42 @@ mod tests {
         assert!((integral - 1.0).abs() < 0.02, "{integral}");
         let (dir, pdf) = map.sample(Vec2::new(0.37, 0.61)).unwrap();
         assert!((pdf / map.pdf(dir) - 1.0).abs() < 1e-3);
+    }
+
+    /// A sun baked into one texel of a dark sky: every sampled direction's radiance over its
+    /// density (a photon's flux, a light sample's weight) stays within 16 times their mean (the
+    /// corner of a diagonal neighbour's cell reads a quarter of the sun, whose mean over that cell
+    /// is a 64th), where the interpolated sun spilling into its dark neighbours' cells made it
+    /// thousands.
+    #[test]
+    fn a_one_texel_sun_weights_no_direction_by_thousands() {
+        let (w, h) = (32, 16);
+        let mut pixels = vec![Vec3::splat(0.5); w * h];
+        pixels[5 * w + 10] = Vec3::splat(2.0e4);
+        let map = EnvironmentMap::new(w, h, &pixels, 0.0);
+        let n = 256;
+        let weights: Vec<f32> = (0..n * n)
+            .filter_map(|i| map.sample(Vec2::new((i % n) as f32 + 0.5, (i / n) as f32 + 0.5) / n as f32))
+            .map(|(dir, pdf)| map.eval(dir, Vec4::splat(550.0)).x / pdf)
+            .collect();
+        let mean = weights.iter().sum::<f32>() / weights.len() as f32;
+        let max = weights.iter().cloned().fold(0.0, f32::max);
+        assert!(max < 16.5 * mean, "the largest weight is {}x the mean", max / mean);
+    }
+
+    #[test]
+    fn cell_means_integrate_the_interpolated_image() {
+        // One bright texel among zeros: 3/4 of it stays in its cell in each axis, 1/8 spills to
+        // each neighbour (wrapping across), and a held edge row keeps its outer eighth.
+        let mut values = vec![0.0; 4 * 3];
+        values[4 + 3] = 64.0;
+        let means = cell_means(&values, 4);
+        assert_eq!(means[4 + 3], 36.0);
+        assert_eq!([means[4 + 2], means[4], means[3], means[8 + 3]], [6.0; 4]);
+        assert_eq!([means[0], means[2], means[8 + 1]], [1.0, 1.0, 0.0]);
+        let mut top = vec![0.0; 4 * 3];
+        top[1] = 64.0;
+        assert_eq!(cell_means(&top, 4)[1], 42.0);
+        assert_eq!(means.iter().sum::<f64>(), 64.0);
     }
 }

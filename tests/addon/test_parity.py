@@ -5,8 +5,9 @@ tests/references/parity/, made by make_parity_references.py; provenance in READM
 For each scene: every named object's mean radiance (its pixels away from its outline, by Cycles'
 object-index pass) within 5% of Cycles' in each channel, and the median over 8x8-pixel blocks of
 the relative difference of luminance under 5% (7% for scenes whose references are noisier, with
-caustics: parity_scenes.TOLERANCES), and some regions' colour within 3% (parity_scenes.COLOURS). Caustic renders PASSES passes; at that count its
-noise in an object's mean is well under 1%. A failing scene leaves Caustic's image, Cycles' and
+caustics: parity_scenes.TOLERANCES), and some regions' colour within 3% (parity_scenes.COLOURS).
+Caustic renders PASSES passes of one photon a pixel (parity_scenes.PASSES and PHOTONS give some
+scenes more); at that count its noise in an object's mean is well under 1%. A failing scene leaves Caustic's image, Cycles' and
 their difference side by side in a PNG, named in the failure.
 """
 import os
@@ -41,6 +42,7 @@ def use_caustic(name, filepath):
     scene = bpy.context.scene
     scene.render.engine = 'CAUSTIC'
     scene.caustic.passes = parity_scenes.PASSES.get(name, PASSES)
+    scene.caustic.photons = parity_scenes.PHOTONS.get(name, 0)
     scene.render.image_settings.media_type = 'IMAGE'
     scene.render.image_settings.file_format = 'OPEN_EXR'
     scene.render.image_settings.color_depth = '32'
