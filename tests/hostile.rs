@@ -271,22 +271,33 @@ fn crc32(bytes: &[u8]) -> u32 {
 
 /// Hostile textures are refused with a message naming the image, never a panic or an
 /// out-of-memory: a truncated PNG, and a PNG that claims 100,000 x 100,000 texels.
-#[test]
-fn hostile_textures_are_refused() {
-    let dir = tempfile::tempdir().unwrap();
-    let d = dir.path();
+/// An 8 x 8 PNG.
+fn small_png() -> Vec<u8> {
     let mut png = Vec::new();
     image::RgbImage::from_pixel(8, 8, image::Rgb([200, 100, 50]))
         .write_to(&mut std::io::Cursor::new(&mut png), image::ImageFormat::Png)
         .unwrap();
-    std::fs::write(d.join("truncated.png"), &png[..png.len() / 2]).unwrap();
+    png
+}
+
+/// A PNG whose header claims 100,000 x 100,000 pixels, with a valid checksum.
+fn huge_png() -> Vec<u8> {
+    let mut huge = small_png();
     // The IHDR chunk's width and height (bytes 16..24) and its CRC (bytes 29..33).
-    let mut huge = png.clone();
     huge[16..20].copy_from_slice(&100_000u32.to_be_bytes());
     huge[20..24].copy_from_slice(&100_000u32.to_be_bytes());
     let crc = crc32(&huge[12..29]);
     huge[29..33].copy_from_slice(&crc.to_be_bytes());
-    std::fs::write(d.join("huge.png"), &huge).unwrap();
+    huge
+}
+
+#[test]
+fn hostile_textures_are_refused() {
+    let dir = tempfile::tempdir().unwrap();
+    let d = dir.path();
+    let png = small_png();
+    std::fs::write(d.join("truncated.png"), &png[..png.len() / 2]).unwrap();
+    std::fs::write(d.join("huge.png"), huge_png()).unwrap();
     for image in ["truncated.png", "huge.png"] {
         let path = furnace_edited(d, &format!("{image}.gltf"), |doc| {
             doc["images"] = json!([{"uri": image}]);
@@ -294,6 +305,31 @@ fn hostile_textures_are_refused() {
             doc["materials"][0]["normalTexture"] = json!({"index": 0});
         });
         assert_refused(&path, &[image, "image"]);
+    }
+}
+
+/// World images that cannot light a scene are refused naming the file: one that is not an image,
+/// one whose header claims 100,000 x 100,000 pixels, and one with a pixel that is not a number.
+#[test]
+fn hostile_world_images_are_refused() {
+    let dir = tempfile::tempdir().unwrap();
+    let d = dir.path();
+    std::fs::write(d.join("text.hdr"), "#?RADIANCE\nnot a sky\n").unwrap();
+    std::fs::write(d.join("huge.png"), huge_png()).unwrap();
+    exr::prelude::write_rgb_file(d.join("nan.exr"), 4, 2, |x, y| match (x, y) {
+        (1, 1) => (f32::NAN, 0.5, 0.5),
+        _ => (0.5, 0.5, 0.5),
+    })
+    .unwrap();
+    for (image, why) in [
+        ("text.hdr", "cannot read environment image"),
+        ("huge.png", "cannot read environment image"),
+        ("nan.exr", "non-finite pixels"),
+    ] {
+        let path = furnace_edited(d, &format!("{image}.gltf"), |doc| {
+            doc["scenes"][0]["extras"] = json!({"caustic": {"world": {"image": image, "strength": 1.0}}});
+        });
+        assert_refused(&path, &[image, why]);
     }
 }
 

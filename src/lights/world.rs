@@ -55,10 +55,11 @@ impl World {
             .map_err(|e| format!("cannot read environment image {}: {e}", path.display()))?;
         let image = image.into_rgb32f();
         let (width, height) = (image.width() as usize, image.height() as usize);
-        let pixels: Vec<Vec3> = image.pixels().map(|p| Vec3::from(p.0).max(Vec3::ZERO)).collect();
-        if pixels.iter().any(|p| !p.is_finite()) {
+        // Checked before negatives are clamped, which would turn a NaN into a black texel.
+        if image.pixels().any(|p| !Vec3::from(p.0).is_finite()) {
             return Err(format!("environment image {} has non-finite pixels", path.display()));
         }
+        let pixels: Vec<Vec3> = image.pixels().map(|p| Vec3::from(p.0).max(Vec3::ZERO)).collect();
         let map = EnvironmentMap::new(width, height, &pixels, rotation_deg.to_radians());
         Ok(World {
             scale: RgbSpectrum::constant(strength.max(0.0)),
