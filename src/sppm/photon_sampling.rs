@@ -211,6 +211,7 @@ pub(super) fn trace_pilot(
 }
 
 /// A chain's current path: its primary sample, its photons, and for how many steps it has stood.
+#[derive(Default)]
 struct ChainState {
     values: Vec<f32>,
     photons: Vec<Photon>,
@@ -230,12 +231,12 @@ struct ChainResult {
 
 impl ChainResult {
     /// Adds `state`'s photons, weighted by the steps it stood.
-    fn keep(&mut self, state: ChainState) {
+    fn keep(&mut self, state: &ChainState) {
         if state.steps == 0 {
             return;
         }
         let weight = state.steps as f32;
-        self.photons.extend(state.photons.into_iter().map(|p| Photon { flux: p.flux * weight, ..p }));
+        self.photons.extend(state.photons.iter().map(|p| Photon { flux: p.flux * weight, ..*p }));
         self.seen_steps += u64::from(state.steps);
     }
 }
@@ -285,9 +286,10 @@ fn trace_chains(
 /// Uniform path `k` of `pass` traced again, with the primary sample it draws.
 fn replay(renderer: &Renderer, pass: &PassSamples, k: u64) -> ChainState {
     let mut fresh = photon_stream(renderer, pass, k);
-    let (values, photons, _) =
-        trace_sample(renderer, pass, Proposal { values: Vec::new(), base: None, rng: &mut fresh });
-    ChainState { values, photons, steps: 0 }
+    let mut state = ChainState::default();
+    let proposal = Proposal { values: &mut state.values, base: None, rng: &mut fresh };
+    trace_sample(renderer, pass, proposal, &mut state.photons);
+    state
 }
 
 /// The coordinate of a photon path's primary sample that chooses its light (the first that
@@ -305,8 +307,8 @@ const LIGHT_CHOICE: usize = 0;
 /// instead would let what rejected proposals found of it be forgotten, and the chain would no
 /// longer keep to its target).
 struct Proposal<'a> {
-    /// The numbers the path read.
-    values: Vec<f32>,
+    /// The numbers the path read (a buffer the chain reuses).
+    values: &'a mut Vec<f32>,
     base: Option<&'a mut Vec<f32>>,
     rng: &'a mut Sampler,
 }
@@ -331,18 +333,18 @@ impl Uniforms for Proposal<'_> {
     }
 }
 
-/// The path of `proposal`: the numbers it read, its photons, and the work done.
+/// Traces the path of `proposal` (whose numbers go into its buffer), appending its photons to
+/// `photons`; gives the work done.
 fn trace_sample(
     renderer: &Renderer,
     pass: &PassSamples,
     mut proposal: Proposal,
-) -> (Vec<f32>, Vec<Photon>, PassStats) {
-    let mut photons = Vec::new();
-    let stats = match emit_photon(renderer, pass, &mut proposal) {
-        Some((state, _)) => continue_photon(renderer, pass, state, &mut photons, |_, _, _| {}),
+    photons: &mut Vec<Photon>,
+) -> PassStats {
+    match emit_photon(renderer, pass, &mut proposal) {
+        Some((state, _)) => continue_photon(renderer, pass, state, photons, |_, _, _| {}),
         None => PassStats::default(),
-    };
-    (proposal.values, photons, stats)
+    }
 }
 
 /// One chain of `steps` steps from `start` (or, without one, from its first seen large step).
@@ -357,16 +359,20 @@ fn run_chain(
     let mut rng = stream(renderer.settings.seed, Stream::PhotonChain, pass.index, chain);
     let mut result = ChainResult::default();
     let mut current = start;
+    // Each proposal is traced into `proposed`'s buffers; an accepted one becomes the current
+    // state, and the state it ends lends its buffers to the next proposal.
+    let mut proposed = ChainState::default();
     for _ in 0..steps {
         // A step is large by a coin that nothing else decides, and only those count toward the
         // normalisation: a chain without a path yet also searches by large steps, but their
         // number depends on what they find (stopping at a first success would bias it).
         let counted = rng.next_1d() < LARGE_STEP;
         let base = current.as_mut().filter(|_| !counted).map(|state| &mut state.values);
-        let (values, photons, stats) =
-            trace_sample(renderer, pass, Proposal { values: Vec::new(), base, rng: &mut rng });
-        result.stats = result.stats + stats;
-        let accepted = photons.iter().any(|p| seen.reaches(p.p));
+        proposed.values.clear();
+        proposed.photons.clear();
+        let proposal = Proposal { values: &mut proposed.values, base, rng: &mut rng };
+        result.stats = result.stats + trace_sample(renderer, pass, proposal, &mut proposed.photons);
+        let accepted = proposed.photons.iter().any(|p| seen.reaches(p.p));
         result.stats.chain_steps_seen += u64::from(accepted);
         if counted {
             result.large_steps += 1;
@@ -374,16 +380,18 @@ fn run_chain(
         }
 
         if accepted {
-            if let Some(state) = current.take() {
-                result.keep(state);
+            proposed.steps = 1;
+            let ended = current.replace(std::mem::take(&mut proposed));
+            if let Some(state) = ended {
+                result.keep(&state);
+                proposed = state;
             }
-            current = Some(ChainState { values, photons, steps: 1 });
         } else if let Some(state) = &mut current {
             state.steps += 1;
         }
     }
     if let Some(state) = current {
-        result.keep(state);
+        result.keep(&state);
     }
     result
 }
