@@ -269,8 +269,6 @@ fn crc32(bytes: &[u8]) -> u32 {
     !crc
 }
 
-/// Hostile textures are refused with a message naming the image, never a panic or an
-/// out-of-memory: a truncated PNG, and a PNG that claims 100,000 x 100,000 texels.
 /// An 8 x 8 PNG.
 fn small_png() -> Vec<u8> {
     let mut png = Vec::new();
@@ -291,6 +289,8 @@ fn huge_png() -> Vec<u8> {
     huge
 }
 
+/// Hostile textures are refused with a message naming the image, never a panic or an
+/// out-of-memory: a truncated PNG, and a PNG that claims 100,000 x 100,000 texels.
 #[test]
 fn hostile_textures_are_refused() {
     let dir = tempfile::tempdir().unwrap();

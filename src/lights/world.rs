@@ -55,6 +55,9 @@ impl World {
             .map_err(|e| format!("cannot read environment image {}: {e}", path.display()))?;
         let image = image.into_rgb32f();
         let (width, height) = (image.width() as usize, image.height() as usize);
+        if width == 0 || height == 0 {
+            return Err(format!("environment image {} has no pixels", path.display()));
+        }
         // Checked before negatives are clamped, which would turn a NaN into a black texel.
         if image.pixels().any(|p| !Vec3::from(p.0).is_finite()) {
             return Err(format!("environment image {} has non-finite pixels", path.display()));
