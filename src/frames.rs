@@ -582,9 +582,13 @@ pub fn motion_spans(description: &Description, frames: &[i32], shutter: Shutter)
 
 impl Shot {
     /// Whether a block of `frames` frames shares paths: reuse is on, there is more than one
-    /// frame and there are static triangles to share.
+    /// frame, there are static triangles to share, and no medium scatters (paths that end in
+    /// media, and the direct light along their segments, are not shared).
     fn shares(&self, settings: &RenderSettings, frames: usize) -> bool {
-        settings.reuse && frames > 1 && self.prepared.triangle_counts().0 > 0
+        settings.reuse
+            && frames > 1
+            && self.prepared.triangle_counts().0 > 0
+            && !self.prepared.description.scatters()
     }
 
     /// How many frames render together: as many as the memory budget holds beside what one

@@ -4,8 +4,9 @@
 use serde_json::{json, Value};
 
 use crate::frames::{is_animated, load_description, motion_spans, shutter, RenderSettings, Shot};
-use crate::materials::Material;
+use crate::materials::{Material, Volume};
 use crate::scene::description::Description;
+use crate::spectrum::Wavelengths;
 use crate::sppm::{Renderer, AUTO_VISIBLE_BELOW};
 
 /// The lights (by node), materials and camera whose values are animated, with what is animated.
@@ -26,11 +27,30 @@ fn animated_values(description: &Description) -> Value {
     json!({"lights": lights.collect::<Vec<_>>(), "materials": materials, "camera": camera})
 }
 
+/// The media of the scene: each material's inside that absorbs or scatters, and the world's fog,
+/// with their coefficients at 550 nm.
+fn media(description: &Description) -> Value {
+    let lambda = Wavelengths::single(550.0, 1.0);
+    let entry = |volume: &Volume| {
+        let (scattering, anisotropy) = volume.scattering(&lambda).unwrap_or_default();
+        json!({"absorption_550nm": volume.absorption(&lambda).x, "scattering_550nm": scattering.x,
+               "anisotropy": anisotropy})
+    };
+    let materials: Vec<Value> = description
+        .materials
+        .iter()
+        .filter_map(|m| Some(json!({"material": m.name, "medium": entry(m.volume.as_ref()?)})))
+        .collect();
+    json!({"materials": materials, "fog": description.fog.as_ref().map(entry)})
+}
+
 /// The JSON report for `settings.scene` over `settings.frames`.
 pub fn report(settings: &RenderSettings) -> Result<Value, String> {
     let description = load_description(settings)?;
     let dispersion = description.materials.iter().any(Material::is_dispersive);
-    let absorption = description.materials.iter().any(|m| m.volume.is_some());
+    let absorption = description.materials.iter().any(|m| m.volume.is_some()) || description.fog.is_some();
+    let scattering = description.scatters();
+    let media = media(&description);
     let cut_away = description.materials.iter().any(|m| m.alpha.cuts());
     let holdouts = description.materials.iter().any(|m| m.holdout);
     let transparent_film = description.transparent_film;
@@ -53,10 +73,11 @@ pub fn report(settings: &RenderSettings) -> Result<Value, String> {
     let (fixed, moving) = prepared.triangle_counts();
     let instanced = prepared.instanced_triangles();
     let shutter = shot.shutter();
-    let reuse = settings.frames.len() > 1 && fixed > 0;
+    let reuse = settings.frames.len() > 1 && fixed > 0 && !scattering;
     let needs = json!({
         "dispersion": dispersion,
         "absorption": absorption,
+        "scattering": scattering,
         "alpha": cut_away,
         "holdouts": holdouts,
         "transparent_film": transparent_film,
@@ -81,13 +102,16 @@ pub fn report(settings: &RenderSettings) -> Result<Value, String> {
         skipped.push("lens sampling (no aperture: pinhole rays)");
     }
     if !reuse {
-        skipped.push("reuse across frames (one frame, or no static triangles to share)");
+        skipped.push("reuse across frames (one frame, no static triangles to share, or a medium scatters)");
     }
     if !dispersion {
         skipped.push("wavelength-dependent refraction (no dispersive material)");
     }
     if !absorption {
         skipped.push("absorption along paths, and the stack of insides they are in (no absorbing volume)");
+    }
+    if !scattering {
+        skipped.push("events in media and the photons stored there (no medium scatters)");
     }
     if !cut_away {
         skipped.push("looking past cut-away surfaces (no material's alpha cuts it)");
@@ -103,6 +127,7 @@ pub fn report(settings: &RenderSettings) -> Result<Value, String> {
         "spans": spans,
         "triangles": {"static": fixed, "moving": moving, "instanced": instanced.0, "instanced_stored": instanced.1},
         "deforming": deforming,
+        "media": media,
         "animated": animated,
         "photons": photons(settings, &shot, animated_scene, reuse),
         "skipped": skipped,

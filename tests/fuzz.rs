@@ -127,8 +127,9 @@ fn textured_seed() -> Value {
 }
 
 /// A scene with every volume input Caustic reads: `KHR_materials_volume` on a rough glass box
-/// with a point light inside it, on water overlapping it with a `caustic` priority and the camera
-/// inside, and on a frosted thin pane with a thickness.
+/// with a point light inside it, on water overlapping it with a `caustic` priority, a `caustic`
+/// medium that scatters and the camera inside, and on a frosted thin pane with a thickness; and
+/// fog in the world.
 fn volume_seed() -> Value {
     let mut gltf = common::GltfBuilder::default();
     let volume = |colour: [f32; 3], roughness: f32, thickness: f32, priority: i32| {
@@ -140,12 +141,17 @@ fn volume_seed() -> Value {
     };
     let glass = gltf.material(volume([0.2, 0.8, 0.3], 0.3, 1.0, 1));
     gltf.mesh("Glass", &common::box_triangles([-0.5, 0.0, -0.5], [0.5, 1.0, 0.5]), glass);
-    let water = gltf.material(volume([0.6, 0.8, 0.9], 0.0, 1.0, 0));
+    let mut water = volume([0.6, 0.8, 0.9], 0.0, 1.0, 0);
+    water["extras"]["caustic"]["medium"] =
+        json!({"absorption": [0.2, 0.1, 0.05], "scattering": [0.5, 0.6, 0.8], "anisotropy": 0.4});
+    let water = gltf.material(water);
     gltf.mesh("Water", &common::box_triangles([-1.0, -0.5, -1.0], [1.0, 0.5, 1.0]), water);
     let pane = gltf.material(volume([0.9, 0.5, 0.2], 0.3, 0.05, 0));
     gltf.mesh("Pane", &[[[-1.0, 2.0, -1.0], [-1.0, 2.0, 1.0], [1.0, 2.0, 1.0]]], pane);
     gltf.light(json!({"type": "point", "intensity": 100.0}), [0.0, 0.7, 0.0], [0.0, -1.0, 0.0]);
     gltf.camera([0.0, 0.2, 0.9], [0.0, 0.0, -1.0], 0.8);
+    gltf.scene_extras(json!({"fog": {"absorption": [0.01, 0.01, 0.01], "scattering": [0.1, 0.1, 0.1],
+        "anisotropy": -0.2}}));
     gltf.to_json()
 }
 

@@ -7,7 +7,8 @@
 //! wavelength). One lobe or layer per file: `diffuse.rs`, `conductor.rs`, `dielectric.rs`,
 //! `plastic.rs` (the specular layer over the base, with `layer_albedo.rs`), `rough_dielectric.rs`
 //! (with `dielectric_albedo.rs`), `rough_thin_dielectric.rs`,
-//! over the GGX distribution in `microfacet.rs`; `volume.rs` absorbs inside transmissive materials; `normal_map.rs` bends the shading normal and shadows the bend.
+//! over the GGX distribution in `microfacet.rs`; `volume.rs` is the medium that fills transmissive
+//! materials or the world, and `phase.rs` its scattering; `normal_map.rs` bends the shading normal and shadows the bend.
 //!
 //! Directions are world-space unit vectors; `wo` and `wi` both point away from the surface.
 
@@ -22,6 +23,7 @@ mod layering;
 mod material;
 mod microfacet;
 mod normal_map;
+mod phase;
 mod plastic;
 mod rough_dielectric;
 mod rough_thin_dielectric;
@@ -39,6 +41,7 @@ pub use inputs::{vertex_colour, SurfaceInputs};
 pub use layer_albedo::{eta_of_f0, f0_of_eta};
 pub use material::{Alpha, BaseColour, Coverage, Lobe, Material, Specular, SMOOTH_ROUGHNESS};
 pub use normal_map::NormalMap;
+pub use phase::of_cosine as phase_of_cosine;
 pub use plastic::{Coat, Plastic};
 pub use rough_dielectric::RoughDielectric;
 pub use rough_thin_dielectric::RoughThinDielectric;
@@ -141,6 +144,14 @@ pub enum Bsdf {
         /// Its roughness.
         roughness: f32,
     },
+    /// Scattering in a medium, at a point inside it rather than on a surface: the medium's
+    /// scattering coefficient times its Henyey–Greenstein phase function (`phase.rs`).
+    Medium {
+        /// The scattering coefficient at each wavelength, per world unit.
+        scattering: SampledSpectrum,
+        /// Henyey–Greenstein's `g`.
+        anisotropy: f32,
+    },
     /// Absorbs everything (a light's own surface).
     Black,
     /// Not there: light goes on unchanged (where alpha cuts the surface away).
@@ -199,7 +210,7 @@ impl Bsdf {
     /// direct light from the far side counts. For the others it is a leak through the surface,
     /// which a shading normal tilted from the geometric one would let through.
     pub fn transmits(&self) -> bool {
-        matches!(self, Bsdf::RoughDielectric { .. } | Bsdf::RoughThinDielectric { .. })
+        matches!(self, Bsdf::RoughDielectric { .. } | Bsdf::RoughThinDielectric { .. } | Bsdf::Medium { .. })
     }
 
     /// Whether [`Bsdf::sample`] reads its `u_lobe` (a dielectric's choice between reflection and
@@ -238,6 +249,7 @@ impl Bsdf {
             Bsdf::RoughThinDielectric { ior, alpha, tint, depth } => {
                 RoughThinDielectric { ior, alpha, tint, depth }.eval(frame, wo, wi)
             }
+            Bsdf::Medium { scattering, anisotropy } => scattering * phase::eval(anisotropy, wo, wi),
             _ => Vec4::ZERO,
         }
     }
@@ -256,6 +268,7 @@ impl Bsdf {
             Bsdf::RoughThinDielectric { ior, alpha, tint, depth } => {
                 RoughThinDielectric { ior, alpha, tint, depth }.pdf(frame, wo, wi)
             }
+            Bsdf::Medium { anisotropy, .. } => phase::eval(anisotropy, wo, wi),
             _ => 0.0,
         }
     }
@@ -290,6 +303,15 @@ impl Bsdf {
                 dielectric::sample_thin(ior, tint, depth, frame, wo, u_lobe)
             }
             Bsdf::Sheen { colour, roughness } => sheen::sample(colour, roughness, n, wo, u),
+            Bsdf::Medium { scattering, anisotropy } => {
+                let wi = phase::sample(anisotropy, wo, u);
+                Some(BsdfSample {
+                    wi,
+                    weight: scattering,
+                    pdf: phase::eval(anisotropy, wo, wi),
+                    is_delta: false,
+                })
+            }
             Bsdf::Black => None,
             Bsdf::PassThrough => Some(BsdfSample { wi: -wo, weight: Vec4::ONE, pdf: 0.0, is_delta: true }),
         }

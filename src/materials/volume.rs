@@ -1,10 +1,15 @@
-//! What fills a transmissive material: absorption by Beer–Lambert's law, as
-//! `KHR_materials_volume` gives it. Light that travels a distance `d` inside keeps
-//! `attenuationColor^(d / attenuationDistance)` of itself, at each wavelength: the colour is
-//! upsampled to a reflectance spectrum `c(λ)` and the absorption coefficient is
-//! `-ln c(λ) / attenuationDistance` (world units). Inside a closed mesh the path's own segments
-//! give `d` (`sppm/media.rs` keeps the stack of volumes a path is in); through a thin wall (an
-//! open mesh) the thickness factor does, over the cosine of the crossing.
+//! What fills a transmissive material, or the world: a homogeneous medium that absorbs and may
+//! scatter.
+//!
+//! Absorption comes either from `KHR_materials_volume`, by Beer–Lambert's law: light that travels
+//! a distance `d` inside keeps `attenuationColor^(d / attenuationDistance)` of itself at each
+//! wavelength (the colour upsampled to a reflectance spectrum `c(λ)`, the coefficient
+//! `-ln c(λ) / attenuationDistance`); or from a `caustic` medium's coefficients per world unit,
+//! upsampled as smooth spectra whose colour under D65 is the RGB given. A medium that scatters
+//! has a scattering coefficient too, and a Henyey–Greenstein anisotropy (`phase.rs`). Inside a
+//! closed mesh the path's own segments give the distances (`sppm/media.rs` keeps the stack of
+//! volumes a path is in); through a thin wall (an open mesh) the thickness factor does, over the
+//! cosine of the crossing, and only absorption counts there.
 
 use glam::{Vec3, Vec4};
 
@@ -13,44 +18,96 @@ use crate::spectrum::{RgbSpectrum, SampledSpectrum, Wavelengths};
 /// Attenuation colours are kept above this, so that a black one absorbs strongly but finitely.
 const DARKEST: f32 = 1e-6;
 
-/// An absorbing volume.
+/// A homogeneous medium.
 #[derive(Clone, Debug)]
 pub struct Volume {
-    /// `attenuationColor` as a reflectance spectrum.
-    colour: RgbSpectrum,
-    /// `attenuationDistance`, world units (positive, finite).
-    distance: f32,
+    absorption: Absorption,
+    scattering: Option<Scattering>,
     /// `thicknessFactor`: the wall's thickness where the mesh is open.
     pub thickness: f32,
+}
+
+/// How a volume absorbs.
+#[derive(Clone, Debug)]
+enum Absorption {
+    /// `KHR_materials_volume`'s attenuation colour (a reflectance spectrum) reached at `distance`
+    /// (positive, finite).
+    Attenuation { colour: RgbSpectrum, distance: f32 },
+    /// A coefficient per world unit.
+    Coefficient(RgbSpectrum),
+}
+
+/// How a volume scatters.
+#[derive(Clone, Debug)]
+struct Scattering {
+    /// The coefficient per world unit.
+    coefficient: RgbSpectrum,
+    /// Henyey–Greenstein's `g`, in (-1, 1).
+    anisotropy: f32,
 }
 
 impl Volume {
     /// The volume of attenuation colour `colour` (linear, in [0, 1]) at `distance` (positive) and
     /// `thickness` (non-negative); the caller checks the values.
     pub fn new(colour: Vec3, distance: f32, thickness: f32) -> Self {
-        Volume { colour: RgbSpectrum::reflectance(colour), distance, thickness }
+        let colour = RgbSpectrum::reflectance(colour);
+        Volume { absorption: Absorption::Attenuation { colour, distance }, scattering: None, thickness }
+    }
+
+    /// The medium of absorption and scattering coefficients `absorption` and `scattering` (per
+    /// world unit, linear RGB, each at least 0) and Henyey–Greenstein anisotropy `anisotropy` (in
+    /// (-1, 1)); the caller checks the values.
+    pub fn medium(absorption: Vec3, scattering: Vec3, anisotropy: f32, thickness: f32) -> Self {
+        let scattering = (scattering.max_element() > 0.0)
+            .then(|| Scattering { coefficient: RgbSpectrum::illuminant(scattering), anisotropy });
+        Volume {
+            absorption: Absorption::Coefficient(RgbSpectrum::illuminant(absorption)),
+            scattering,
+            thickness,
+        }
     }
 
     /// The absorption coefficient at the wavelengths `lambda`, per world unit.
     pub fn absorption(&self, lambda: &Wavelengths) -> SampledSpectrum {
-        let colour = self.colour.eval_lanes(lambda.nm).clamp(Vec4::splat(DARKEST), Vec4::ONE);
-        -colour.ln() / self.distance
+        match &self.absorption {
+            Absorption::Attenuation { colour, distance } => {
+                let colour = colour.eval_lanes(lambda.nm).clamp(Vec4::splat(DARKEST), Vec4::ONE);
+                -colour.ln() / *distance
+            }
+            Absorption::Coefficient(coefficient) => coefficient.eval_lanes(lambda.nm).max(Vec4::ZERO),
+        }
     }
 
-    /// The share of light at `lambda` that travels `length` through it (0 at an infinite length
-    /// where anything is absorbed).
+    /// The scattering coefficient at `lambda` and the anisotropy, where the volume scatters.
+    pub fn scattering(&self, lambda: &Wavelengths) -> Option<(SampledSpectrum, f32)> {
+        let s = self.scattering.as_ref()?;
+        Some((s.coefficient.eval_lanes(lambda.nm).max(Vec4::ZERO), s.anisotropy))
+    }
+
+    /// Whether it scatters light (else it only absorbs).
+    pub fn scatters(&self) -> bool {
+        self.scattering.is_some()
+    }
+
+    /// The extinction coefficient (absorption plus scattering) at `lambda`, per world unit.
+    pub fn extinction(&self, lambda: &Wavelengths) -> SampledSpectrum {
+        self.absorption(lambda) + self.scattering(lambda).map_or(Vec4::ZERO, |(s, _)| s)
+    }
+
+    /// The share of light at `lambda` that travels `length` through it unabsorbed and unscattered
+    /// (0 at an infinite length where anything is absorbed or scattered).
     pub fn transmittance(&self, lambda: &Wavelengths, length: f32) -> SampledSpectrum {
-        transmittance(self.absorption(lambda), length)
+        transmittance(self.extinction(lambda), length)
     }
 }
 
-/// `exp(-absorption * length)`, with an infinite length absorbing all (where the coefficient is
+/// `exp(-coefficient * length)`, with an infinite length taking all (where the coefficient is
 /// positive) or nothing (where it is 0) rather than giving NaN.
-pub fn transmittance(absorption: SampledSpectrum, length: f32) -> SampledSpectrum {
+pub fn transmittance(coefficient: SampledSpectrum, length: f32) -> SampledSpectrum {
     if length.is_finite() {
-        (-absorption * length).exp()
+        (-coefficient * length).exp()
     } else {
-        Vec4::select(absorption.cmpgt(Vec4::ZERO), Vec4::ZERO, Vec4::ONE)
+        Vec4::select(coefficient.cmpgt(Vec4::ZERO), Vec4::ZERO, Vec4::ONE)
     }
 }
 
@@ -74,5 +131,21 @@ mod tests {
         let lambda = Wavelengths { nm: Vec4::new(450.0, 530.0, 610.0, 650.0), ..Wavelengths::sampled(0.5) };
         let red = Volume::new(Vec3::new(0.9, 0.1, 0.1), 1.0, 0.0).transmittance(&lambda, 1.0);
         assert!(red.w > 0.7 && red.x < 0.2 && red.y < 0.2, "{red}");
+    }
+
+    #[test]
+    fn a_medium_takes_what_it_absorbs_and_scatters() {
+        let lambda = Wavelengths::sampled(0.3);
+        let grey = Volume::medium(Vec3::splat(0.5), Vec3::splat(1.5), 0.3, 0.0);
+        let through = grey.transmittance(&lambda, 2.0);
+        assert!((through - Vec4::splat((-4.0f32).exp())).abs().max_element() < 1e-5, "{through}");
+        let (scattering, g) = grey.scattering(&lambda).unwrap();
+        assert!((scattering - Vec4::splat(1.5)).abs().max_element() < 1e-4 && g == 0.3, "{scattering}");
+        let clear = Volume::medium(Vec3::splat(0.2), Vec3::ZERO, 0.0, 0.0);
+        assert!(!clear.scatters() && clear.scattering(&lambda).is_none());
+        let blue = Volume::medium(Vec3::ZERO, Vec3::new(0.0, 0.0, 4.0), 0.0, 0.0);
+        let lambda = Wavelengths { nm: Vec4::new(450.0, 530.0, 610.0, 650.0), ..lambda };
+        let (s, _) = blue.scattering(&lambda).unwrap();
+        assert!(s.x > 1.0 && s.z < 0.5 * s.x, "blue fog scatters blue most: {s}");
     }
 }

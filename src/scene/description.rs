@@ -11,7 +11,7 @@ pub use crate::camera::Lens;
 use crate::camera::Projection;
 use crate::geometry::Cone;
 use crate::lights::{SphereLight, SpotFalloff, World};
-use crate::materials::Material;
+use crate::materials::{Material, Volume};
 use crate::spectrum::Illuminant;
 
 /// Triangles attached to a node, in the node's local space.
@@ -170,6 +170,8 @@ pub struct Description {
     pub material_animations: Vec<(usize, super::values::MaterialAnimation)>,
     /// The world, if any.
     pub world: Option<World>,
+    /// The medium filling the world outside every closed transmissive mesh, if any.
+    pub fog: Option<Volume>,
     /// Resolution from the extras.
     pub resolution: Option<[u32; 2]>,
     /// The film is transparent where the camera sees the world (Blender's Film > Transparent).

@@ -4,12 +4,13 @@
 //! inside it are errors (a typo must not be silently ignored). The schema is documented for users
 //! in `docs/extras.md`; keep the two in step.
 //!
-//! - scene: `{"caustic": {"resolution": [w, h], "world": World, "fps": 24, "shutter": Shutter,
-//!   "tracks": [Track]}}`
+//! - scene: `{"caustic": {"resolution": [w, h], "world": World, "fog": Medium, "fps": 24,
+//!   "shutter": Shutter, "tracks": [Track]}}`
 //! - node: `{"caustic": {"area_light": AreaLight}}` on an area light's (empty) node, and
 //!   `{"caustic": {"sun_angle_deg": a}}` on a sun's node, `{"caustic": {"lens": Lens}}` on the
 //!   camera's node;
-//! - material: `{"caustic": {"glass": "BK7"}}`, or `"abbe"`, `"sellmeier"`, `"ior_table"`.
+//! - material: `{"caustic": {"glass": "BK7"}}`, or `"abbe"`, `"sellmeier"`, `"ior_table"`;
+//!   `{"caustic": {"medium": Medium}}` for what fills it.
 
 use serde::Deserialize;
 
@@ -21,6 +22,9 @@ pub struct SceneExtras {
     pub resolution: Option<[u32; 2]>,
     /// The world's light.
     pub world: Option<WorldExtras>,
+    /// The medium filling the world outside every closed transmissive mesh (Blender's world
+    /// volume).
+    pub fog: Option<MediumExtras>,
     /// A regression scene's analytic question (read by its tests; the renderer ignores it).
     pub regression: Option<serde_json::Value>,
     /// Frames per second: glTF time = frame / fps (default 24).
@@ -175,6 +179,23 @@ pub struct MaterialExtras {
     /// sees it.
     #[serde(default)]
     pub holdout: bool,
+    /// The medium that fills it (in place of `KHR_materials_volume`'s absorption).
+    pub medium: Option<MediumExtras>,
+}
+
+/// A homogeneous medium: coefficients per world unit, as linear Rec.709 colours.
+#[derive(Debug, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct MediumExtras {
+    /// The absorption coefficient (default 0).
+    #[serde(default)]
+    pub absorption: [f32; 3],
+    /// The scattering coefficient (default 0).
+    #[serde(default)]
+    pub scattering: [f32; 3],
+    /// Henyey–Greenstein's `g`, in (-1, 1) (default 0: scattering evenly).
+    #[serde(default)]
+    pub anisotropy: f32,
 }
 
 /// Sellmeier coefficients: `n^2 = 1 + sum b_k l^2 / (l^2 - c_k)`, l in micrometres.

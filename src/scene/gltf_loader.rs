@@ -130,6 +130,13 @@ pub fn load(path: &Path) -> Result<Description, SceneError> {
         builder.visit(&node, &rig).map_err(fail)?;
     }
     let world = scene_extras.world.as_ref().map(|w| world(w, path)).transpose().map_err(fail)?;
+    let fog = scene_extras
+        .fog
+        .as_ref()
+        .map(|fog| {
+            super::gltf_materials::medium(fog).map_err(|e| fail(format!("scene extras `caustic.fog.{e}")))
+        })
+        .transpose()?;
     let material_animations = builder.material_animations_with_copies();
     let camera = builder.camera.ok_or_else(|| {
         fail(match &scene_extras.camera {
@@ -151,6 +158,7 @@ pub fn load(path: &Path) -> Result<Description, SceneError> {
         material_animations,
         materials: builder.materials,
         world,
+        fog,
         resolution: scene_extras.resolution,
         transparent_film: scene_extras.transparent_film,
         fps,

@@ -6,7 +6,7 @@ use std::sync::Arc;
 
 use glam::Vec3;
 
-use super::extras::{self, MaterialExtras};
+use super::extras::{self, MaterialExtras, MediumExtras};
 use super::gltf_textures::{decode, info_map, normal_map, raw_info};
 use gltf::material::AlphaMode;
 
@@ -68,7 +68,10 @@ pub fn material(
     let sheen = sheen(m, document, images).map_err(in_material)?;
     let extras: MaterialExtras =
         extras::parse(m.extras()).map_err(|e| in_material(format!("extras `caustic`: {e}")))?;
-    let volume = volume(m).map_err(in_material)?;
+    let volume = match &extras.medium {
+        Some(extras) => Some(medium(extras).map_err(|e| in_material(format!("extras `caustic.medium.{e}")))?),
+        None => volume(m).map_err(in_material)?,
+    };
     let ior = dispersion_law(m, &extras).map_err(in_material)?;
     if extras.holdout {
         // Blender's Holdout shader: black wherever it is not a hole in the film.
@@ -241,6 +244,24 @@ fn volume(m: &gltf::Material) -> Result<Option<Volume>, String> {
     let distance = distance.map_or(f32::INFINITY, |d| d as f32);
     let absorbs = distance.is_finite() && colour != Vec3::ONE && thickness > 0.0;
     Ok(absorbs.then(|| Volume::new(colour, distance, thickness as f32)))
+}
+
+/// The homogeneous medium `extras` describe; an error names the field (`scattering`: ...).
+pub fn medium(extras: &MediumExtras) -> Result<Volume, String> {
+    let coefficient = |name: &str, rgb: [f32; 3]| {
+        if rgb.iter().all(|c| c.is_finite() && *c >= 0.0) {
+            Ok(Vec3::from(rgb))
+        } else {
+            Err(format!("{name}`: expected three finite numbers of 0 or more, got {rgb:?}"))
+        }
+    };
+    let absorption = coefficient("absorption", extras.absorption)?;
+    let scattering = coefficient("scattering", extras.scattering)?;
+    let g = extras.anisotropy;
+    if !(g.abs() < 1.0) {
+        return Err(format!("anisotropy`: expected a number between -1 and 1 (not either), got {g}"));
+    }
+    Ok(Volume::medium(absorption, scattering, g, 0.0))
 }
 
 /// A JSON array of three numbers in [0, 1], as a colour.

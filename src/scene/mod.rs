@@ -32,7 +32,7 @@ use glam::{Vec2, Vec3, Vec3A};
 use crate::accel::{BuildFor, Bvh, Hit};
 use crate::camera::Camera;
 use crate::lights::{BoundingSphere, Light, LightTree, SphereLight};
-use crate::materials::{Material, ShadingFrame, SurfaceInputs};
+use crate::materials::{Material, ShadingFrame, SurfaceInputs, Volume};
 use crate::sampling::Distribution1D;
 use crate::spectrum::{SampledSpectrum, Wavelengths};
 use crate::texture::UV_SETS;
@@ -176,6 +176,8 @@ pub struct Scene {
     pub aspect_ratio: Option<f32>,
     /// The film is transparent where the camera sees the world.
     pub transparent_film: bool,
+    /// The medium filling the world outside every closed transmissive mesh, if any.
+    pub fog: Option<Volume>,
 }
 
 /// The entry of `Scene::triangle_lights` for triangles that emit nothing.
@@ -298,5 +300,10 @@ impl Description {
     /// Reads a glTF 2.0 file.
     pub fn load(path: &Path) -> Result<Description, SceneError> {
         gltf_loader::load(path)
+    }
+
+    /// Whether some medium scatters light: a material's inside, or the world's fog.
+    pub fn scatters(&self) -> bool {
+        self.materials.iter().filter_map(|m| m.volume.as_ref()).chain(&self.fog).any(Volume::scatters)
     }
 }

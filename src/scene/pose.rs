@@ -526,6 +526,7 @@ impl Prepared {
             resolution: d.resolution,
             aspect_ratio: d.camera.aspect_ratio,
             transparent_film: d.transparent_film,
+            fog: d.fog.clone(),
         }
     }
 }

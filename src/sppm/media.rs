@@ -6,15 +6,17 @@
 //! the glass wall, as artists do to avoid coincident faces) the priority says which fills the
 //! overlap.
 //!
+//! Outside every inside, the world's fog (if the scene has one) fills the space.
+//!
 //! Paths start in the insides their start lies in ([`media_at`]: the camera's lens centre, each
 //! light's centre), found by a ray that counts which meshes it leaves without having entered.
-//! Scenes where nothing absorbs never look at any of this.
+//! Scenes where nothing absorbs and there is no fog never look at any of this.
 
 use glam::Vec3;
 
 use crate::accel::Accel;
 use crate::geometry::offset_origin;
-use crate::materials::transmittance;
+use crate::materials::Volume;
 use crate::scene::Scene;
 use crate::spectrum::{SampledSpectrum, Wavelengths};
 
@@ -48,10 +50,19 @@ impl Media {
             .reduce(|best, m| if priority(m) > priority(best) { m } else { best })
     }
 
-    /// What a segment of `length` keeps of the light at `lambda` (1 outside every volume).
+    /// The medium that fills where the path is: its inside's volume (none for a clear one), or
+    /// outside every inside, the world's fog.
+    pub fn medium<'s>(&self, scene: &'s Scene) -> Option<&'s Volume> {
+        match self.filling(scene) {
+            Some(material) => scene.materials[material as usize].volume.as_ref(),
+            None => scene.fog.as_ref(),
+        }
+    }
+
+    /// What a segment of `length` keeps of the light at `lambda`, unabsorbed and unscattered
+    /// (`None` where nothing fills the path's place).
     pub fn transmittance(&self, scene: &Scene, lambda: &Wavelengths, length: f32) -> Option<SampledSpectrum> {
-        let volume = scene.materials[self.filling(scene)? as usize].volume.as_ref()?;
-        Some(transmittance(volume.absorption(lambda), length))
+        Some(self.medium(scene)?.transmittance(lambda, length))
     }
 
     /// The media after a path at a surface of `material` with outward geometric normal `ng`

@@ -6,10 +6,12 @@
 
 mod direct;
 mod footprint;
+mod free_flight;
 mod gather;
 mod grid;
 mod guides;
 mod media;
+mod medium_light;
 mod pass;
 mod photon_sampling;
 mod photons;
@@ -19,6 +21,7 @@ mod renderer;
 mod see_through;
 mod shared;
 mod visible;
+mod volume_gather;
 
 pub use footprint::ViewMeasure;
 pub use guides::Guide;

@@ -1,6 +1,8 @@
 //! The photon pass (DESIGN.md step 3): photons leave lights chosen by power, carrying the pass's
 //! wavelengths, and random-walk with Russian roulette. A photon is stored at every non-delta
-//! vertex from the second on: the first is direct light, which next-event estimation counts.
+//! vertex from the second on: the first is direct light, which next-event estimation counts. In
+//! a medium that scatters, a photon meets events by free flight (`free_flight.rs`); at each it
+//! is stored (from the second vertex on, as on surfaces) and scattered by the phase function.
 //!
 //! A path is a [`PhotonState`] advanced segment by segment; a caller can watch each segment
 //! before it is traced and resume the path later from any saved state, drawing exactly the random
@@ -10,13 +12,14 @@ use glam::{Vec3, Vec3A};
 
 use rayon::prelude::*;
 
+use super::free_flight::{Crossing, Flight};
 use super::media::Media;
 use super::renderer::{PassSamples, PassStats, Renderer, MAX_DEPTH};
 use crate::geometry::offset_origin;
 use crate::lights::SoftFalloff;
-use crate::materials::{Bsdf, Transport};
+use crate::materials::{Bsdf, ShadingFrame, Transport, Volume};
 use crate::sampling::{stream, Sampler, Stream, Uniforms};
-use crate::spectrum::{hero_only, SampledSpectrum, LANES};
+use crate::spectrum::{hero_only, SampledSpectrum, Wavelengths, LANES};
 
 /// A stored photon.
 #[derive(Clone, Copy, Debug)]
@@ -25,7 +28,8 @@ pub struct Photon {
     pub p: Vec3,
     /// Unit direction back toward where it came from.
     pub wi: Vec3,
-    /// Geometric normal of the surface it landed on, facing `wi`.
+    /// Geometric normal of the surface it landed on, facing `wi`; zero for a photon stored in a
+    /// medium.
     pub ng: Vec3,
     /// Its flux at the pass's wavelengths, already divided by the photons per pass.
     pub flux: SampledSpectrum,
@@ -131,17 +135,31 @@ pub fn continue_photon<R: Uniforms>(
     while state.depth < MAX_DEPTH {
         stats.photon_rays += 1;
         let hit = renderer.accel.intersect_opaque(state.origin.into(), state.direction.into(), f32::INFINITY);
-        watch(&state, hit.map_or(f32::INFINITY, |h| h.t), out.len() - first_stored);
+        let length = hit.map_or(f32::INFINITY, |h| h.t);
+        // What the medium it crossed absorbed joins the roulette's weight below, so that photons
+        // in a dark volume end rather than carry ever less flux.
+        let mut kept = SampledSpectrum::ONE;
+        if let Some(volume) = renderer.has_volumes.then(|| state.media.medium(scene)).flatten() {
+            if !volume.scatters() {
+                kept = volume.transmittance(&pass.wavelengths, length);
+            } else {
+                let flight = Flight::new(volume, &pass.wavelengths, state.hero_only);
+                match flight.cross(length, state.rng.next_1d()) {
+                    Crossing::Event { t, weight } => {
+                        watch(&state, t, out.len() - first_stored);
+                        let lambda = &pass.wavelengths;
+                        match scatter_in_medium(&mut state, volume, (t, weight), lambda, out, &mut stats) {
+                            true => continue,
+                            false => break,
+                        }
+                    }
+                    Crossing::Passed { weight } => kept = weight,
+                }
+            }
+        }
+        watch(&state, length, out.len() - first_stored);
         let Some(hit) = hit else {
             break;
-        };
-        // What the volume it crossed absorbed joins the roulette's weight below, so that photons
-        // in a dark volume end rather than carry ever less flux.
-        let kept = match renderer.has_volumes {
-            true => {
-                state.media.transmittance(scene, &pass.wavelengths, hit.t).unwrap_or(SampledSpectrum::ONE)
-            }
-            false => SampledSpectrum::ONE,
         };
         let surface = scene.surface(&hit, &pass.wavelengths);
         let material = &scene.materials[surface.material as usize];
@@ -194,4 +212,47 @@ pub fn continue_photon<R: Uniforms>(
         state.scattered |= *bsdf != Bsdf::PassThrough;
     }
     stats
+}
+
+/// A photon's event `t` along its segment through `volume`, which scatters, its throughput
+/// weighed by `weight` ([`Crossing::Event`]): stores the photon there (after a first scattering:
+/// light that comes straight from a light is next-event estimation's) and scatters it by the
+/// phase function, or ends it by Russian roulette (`false`).
+fn scatter_in_medium<R: Uniforms>(
+    state: &mut PhotonState<R>,
+    volume: &Volume,
+    (t, weight): (f32, SampledSpectrum),
+    lambda: &Wavelengths,
+    out: &mut Vec<Photon>,
+    stats: &mut PassStats,
+) -> bool {
+    let direction = Vec3::from(state.direction);
+    let p = Vec3::from(state.origin) + direction * t;
+    if let Some(soft) = state.soft_falloff.take() {
+        state.flux *= soft.at(p);
+    }
+    let flux = state.flux * weight;
+    if state.scattered {
+        out.push(Photon { p, wi: -direction, ng: Vec3::ZERO, flux, hero_only: state.hero_only });
+        stats.photons_stored += 1;
+    }
+    let Some((scattering, anisotropy)) = volume.scattering(lambda) else { return false };
+    let phase = Bsdf::Medium { scattering, anisotropy };
+    let wo = -direction;
+    let Some(sample) =
+        phase.sample(ShadingFrame::new(wo, wo), wo, state.rng.next_2d(), 0.0, Transport::Importance)
+    else {
+        return false;
+    };
+    let carried = weight * sample.weight;
+    let survive = (carried.element_sum() / LANES as f32).min(1.0);
+    if state.rng.next_1d() >= survive {
+        return false;
+    }
+    state.flux *= carried / survive;
+    state.origin = p.into();
+    state.direction = sample.wi.into();
+    state.depth += 1;
+    state.scattered = true;
+    true
 }

@@ -6,7 +6,7 @@ use std::sync::{Arc, Mutex, PoisonError};
 
 use crate::accel::Accel;
 use crate::lights::LightTree;
-use crate::materials::{Bsdf, ShadingFrame};
+use crate::materials::{Bsdf, ShadingFrame, Volume};
 use crate::sampling::{pass_sample, Distribution1D};
 use crate::scene::Scene;
 use crate::spectrum::{SampledSpectrum, Wavelengths};
@@ -151,8 +151,10 @@ impl SppmSettings {
             None => Wavelengths::sampled(pass_sample(self.seed, index)),
         };
         let r1_squared = self.initial_radius * self.initial_radius;
-        let radius = radius::radius_squared(r1_squared, self.alpha, index + 1).sqrt() as f32;
-        PassSamples { index, wavelengths, radius }
+        let radius_squared = radius::radius_squared(r1_squared, self.alpha, index + 1);
+        let radius = radius_squared.sqrt() as f32;
+        let volume_radius = (self.initial_radius * (radius_squared / r1_squared).cbrt()) as f32;
+        PassSamples { index, wavelengths, radius, volume_radius }
     }
 }
 
@@ -165,6 +167,9 @@ pub struct PassSamples {
     pub wavelengths: Wavelengths,
     /// The gather radius.
     pub radius: f32,
+    /// The gather radius in media: Knaus & Zwicker's sequence in three dimensions (the sphere's
+    /// volume, not the disc's area, shrinks by the same factor a pass).
+    pub volume_radius: f32,
 }
 
 /// One pixel's estimate for one pass, at the pass's wavelengths.
@@ -283,8 +288,11 @@ pub struct Renderer<'a> {
     pub(super) settings: SppmSettings,
     /// Some material's alpha cuts its surface away somewhere: shadow rays look through.
     pub(super) has_cut_away_surfaces: bool,
-    /// Some material absorbs inside: paths keep the stack of the insides they are in.
+    /// Some material absorbs inside, or the world has fog: paths keep the stack of the insides
+    /// they are in.
     pub(super) has_volumes: bool,
+    /// Some medium scatters: paths meet events in media, and photons are stored there.
+    pub(super) has_scattering: bool,
     /// The insides the camera and each light are in (none where nothing absorbs).
     start_media: StartMedia,
 }
@@ -333,7 +341,13 @@ impl<'a> Renderer<'a> {
             light_tree: (settings.light_sampling == LightSampling::Tree).then_some(&*scene.light_tree),
             settings,
             has_cut_away_surfaces: scene.materials.iter().any(|m| m.alpha.cuts()),
-            has_volumes: scene.materials.iter().any(|m| m.volume.is_some()),
+            has_volumes: scene.materials.iter().any(|m| m.volume.is_some()) || scene.fog.is_some(),
+            has_scattering: scene
+                .materials
+                .iter()
+                .filter_map(|m| m.volume.as_ref())
+                .chain(&scene.fog)
+                .any(Volume::scatters),
             start_media: StartMedia::default(),
         };
         renderer.start_media = StartMedia::of(&renderer);

@@ -26,11 +26,12 @@
 use glam::{Vec2, Vec3, Vec3A};
 
 use super::direct::{DirectLight, DirectTerm, ShadowRay};
+use super::free_flight::Flight;
 use super::media::Media;
+use super::medium_light::in_scattered;
 use super::renderer::{PassSamples, PassStats, Renderer, VisiblePoint, MAX_DEPTH};
-use crate::accel::Hit;
 use crate::geometry::offset_origin;
-use crate::materials::{Bsdf, Lobe, Transport};
+use crate::materials::{Bsdf, Lobe, ShadingFrame, Transport, Volume};
 use crate::sampling::{pixel_stream, PixelSampler};
 use crate::spectrum::{hero_only, SampledSpectrum, Wavelengths};
 
@@ -153,14 +154,40 @@ pub fn continue_eye_path(
     while state.depth < MAX_DEPTH {
         stats.eye_rays += 1;
         let hit = renderer.accel.intersect(state.origin.into(), state.direction.into(), f32::INFINITY);
-        watch(EyeEvent::Segment(&state, hit.map_or(f32::INFINITY, |h| h.t)));
-        if renderer.has_volumes {
-            let length = hit.map_or(f32::INFINITY, |h| h.t);
-            state.beta *=
-                state.media.transmittance(scene, &pass.wavelengths, length).unwrap_or(SampledSpectrum::ONE);
-        }
+        let length = hit.map_or(f32::INFINITY, |h| h.t);
+        watch(EyeEvent::Segment(&state, length));
+        let medium = renderer.has_volumes.then(|| state.media.medium(scene)).flatten();
+        let flight =
+            medium.filter(|v| v.scatters()).map(|v| Flight::new(v, &pass.wavelengths, state.hero_only));
+        // In a medium that scatters: the direct light it scatters along the segment, and where
+        // the path's free flight ends (beyond the segment where it passes).
+        let event = match (medium, flight) {
+            (Some(volume), Some(flight)) => {
+                let segment = (state.origin.into(), state.direction.into(), length);
+                let light = in_scattered(renderer, &pass.wavelengths, segment, volume, &mut state.rng);
+                state.radiance += state.beta * light;
+                flight.draw(state.rng.next_1d())
+            }
+            _ => f32::INFINITY,
+        };
+        // What the medium keeps of light over a distance short of the event.
+        let kept = |distance: f32| match (medium, flight) {
+            (_, Some(flight)) => flight.pass_weight(distance),
+            (Some(volume), None) => volume.transmittance(&pass.wavelengths, distance),
+            (None, _) => SampledSpectrum::ONE,
+        };
         if !state.lights_sampled && !scene.sphere_lights.is_empty() {
-            state.radiance += state.beta * spheres_seen(renderer, &state, hit, &pass.wavelengths);
+            let reach = length.min(event);
+            state.radiance += state.beta * spheres_seen(renderer, &state, reach, &pass.wavelengths, kept);
+        }
+        if let (Some(volume), Some(flight), true) = (medium, flight, event < length) {
+            state.beta *= flight.event_weight(event);
+            point = Some(medium_point(&state, volume, event, &pass.wavelengths));
+            radiance_before = state.radiance;
+            break;
+        }
+        if medium.is_some() {
+            state.beta *= kept(length);
         }
         let Some(hit) = hit else {
             if state.camera_ray && scene.transparent_film {
@@ -241,22 +268,42 @@ pub fn continue_eye_path(
     (EyeEnd { result, radiance_before, direct }, stats)
 }
 
-/// The radiance of the sphere lights an eye segment from `state` meets before its `hit` (the
-/// camera's own ray sees only those visible to the camera).
+/// The radiance of the sphere lights an eye segment from `state` meets within `reach` (the
+/// camera's own ray sees only those visible to the camera), each times what the medium `kept`
+/// of it over its distance.
 fn spheres_seen(
     renderer: &Renderer,
     state: &EyeState,
-    hit: Option<Hit>,
+    reach: f32,
     lambda: &Wavelengths,
+    kept: impl Fn(f32) -> SampledSpectrum,
 ) -> SampledSpectrum {
     let direction = Vec3::from(state.direction);
-    let t_max = hit.map_or(f32::INFINITY, |h| h.t);
     renderer
         .scene
-        .spheres_met(state.origin.into(), direction, t_max)
+        .spheres_met(state.origin.into(), direction, reach)
         .filter(|(_, sphere, _)| sphere.seen_by_camera || !state.camera_ray)
-        .map(|(_, sphere, _)| sphere.radiance(-direction, lambda))
+        .map(|(_, sphere, t)| sphere.radiance(-direction, lambda) * kept(t))
         .sum()
+}
+
+/// The visible point of an eye path whose free flight from `state` ends `t` along its segment in
+/// `volume`: photons in the medium are gathered there, by the phase function.
+fn medium_point(state: &EyeState, volume: &Volume, t: f32, lambda: &Wavelengths) -> VisiblePoint {
+    let direction = Vec3::from(state.direction);
+    let p = Vec3::from(state.origin) + direction * t;
+    let (scattering, anisotropy) = volume.scattering(lambda).unwrap_or_default();
+    let wo = -direction;
+    let bsdf = Bsdf::Medium { scattering, anisotropy };
+    VisiblePoint::new(
+        p,
+        ShadingFrame::new(wo, wo),
+        wo,
+        bsdf,
+        state.beta,
+        state.hero_only,
+        p.abs().max_element(),
+    )
 }
 
 /// The radiance of an eye path: what it found before its visible point plus the direct light

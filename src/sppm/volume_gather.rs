@@ -1,0 +1,104 @@
+//! The gather in media: at a visible point where an eye path's free flight ended in a medium
+//! that scatters, the photons stored in media within the pass's volume radius, weighted by a
+//! smooth kernel and the medium's phase function (times its scattering coefficient).
+//!
+//! The kernel is the normalised 3-D biweight `K(t) = 105 / (32 pi r^3) (1 - t^2)^2`, `t = d / r`;
+//! its Laplacian with respect to the gather position is `K(t)`'s factor times
+//! `-4 / r^2 (3 - 5 t^2)`. The film turns a pass's Laplacian estimate into the error bound's bias
+//! term with the disc's radius and the 2-D biweight's second moment (`r^2 / 8` per axis); the 3-D
+//! kernel's is `r^2 / 9`, so the estimate here is scaled by `(8 / 9) (r_volume / r)^2` to give the
+//! sphere's bias through the same term.
+//!
+//! A photon in a medium is stored with the flux that reached its event over the density of the
+//! event's distance (`free_flight.rs`), so the photons' kernel-weighted sum estimates the radiance
+//! arriving at the point from each direction; the phase function times the scattering coefficient
+//! turns it into the radiance scattered toward the eye. Near a medium's boundary the sphere
+//! reaches outside, where no medium photons are: the estimate there is low by the kernel mass
+//! outside (not corrected, unlike the disc's edges on surfaces).
+
+use glam::Vec3;
+use rayon::prelude::*;
+use std::f32::consts::PI;
+
+use super::gather::{PhotonSet, PhotonSums};
+use super::grid::PhotonGrid;
+use super::photons::Photon;
+use super::renderer::{PixelEstimate, VisiblePoint};
+use super::visible::EyeResult;
+use crate::materials::Bsdf;
+use crate::spectrum::{SampledSpectrum, LANES};
+
+/// A pass's photons stored in media, bucketed for gathers of one radius.
+pub struct MediumPhotons {
+    sorted: Vec<Photon>,
+    grid: PhotonGrid,
+    radius: f32,
+    /// The factor that turns the Laplacian sum into the film's bias term (see the module notes).
+    laplacian_scale: f32,
+}
+
+impl MediumPhotons {
+    /// Buckets `photons` for gathers of radius `radius` in a pass whose surface radius is
+    /// `surface_radius`.
+    pub fn new(photons: Vec<Photon>, radius: f32, surface_radius: f32) -> Self {
+        let positions: Vec<Vec3> = photons.iter().map(|p| p.p).collect();
+        let (grid, order) = PhotonGrid::build(&positions, radius);
+        let sorted = order.iter().map(|&i| photons[i as usize]).collect();
+        let kernel = 105.0 / (32.0 * PI * radius * radius * radius);
+        let bias_term = 8.0 / 9.0 * (radius / surface_radius).powi(2);
+        MediumPhotons { sorted, grid, radius, laplacian_scale: kernel * -4.0 / (radius * radius) * bias_term }
+    }
+
+    /// The pixel's estimate at `vp`, a point in a medium.
+    fn estimate(&self, eye: &EyeResult, vp: &VisiblePoint) -> PixelEstimate {
+        let r2 = self.radius * self.radius;
+        let hero_only_scale = if vp.hero_only() { 1.0 / LANES as f32 } else { 1.0 };
+        let (mut kernel, mut laplacian) = (SampledSpectrum::ZERO, SampledSpectrum::ZERO);
+        self.grid.for_each_near(vp.p, |range| {
+            for photon in &self.sorted[range] {
+                let d2 = photon.p.distance_squared(vp.p);
+                if d2 >= r2 {
+                    continue;
+                }
+                let flux = if photon.hero_only { photon.flux * hero_only_scale } else { photon.flux };
+                let weighted = flux * vp.bsdf.eval(vp.frame, vp.wo, photon.wi);
+                let t2 = d2 / r2;
+                kernel += weighted * ((1.0 - t2) * (1.0 - t2));
+                laplacian += weighted * (3.0 - 5.0 * t2);
+            }
+        });
+        let scale = 105.0 / (32.0 * PI * r2 * self.radius);
+        PixelEstimate {
+            radiance: eye.radiance + vp.beta * kernel * scale,
+            laplacian: vp.beta * laplacian * self.laplacian_scale,
+            coverage: eye.coverage,
+        }
+    }
+}
+
+/// Whether a visible point lies in a medium rather than on a surface.
+pub fn in_medium(vp: &VisiblePoint) -> bool {
+    matches!(vp.bsdf, Bsdf::Medium { .. })
+}
+
+/// The photons stored on surfaces and those stored in media, apart.
+pub fn split_photons(photons: Vec<Photon>) -> (Vec<Photon>, Vec<Photon>) {
+    photons.into_iter().partition(|p| p.ng != Vec3::ZERO)
+}
+
+/// Every pixel's estimate from its eye result, the pass's surface photons and its photons in
+/// media.
+pub fn gather_with_media(
+    eye: &[EyeResult],
+    surfaces: &PhotonSet,
+    media: &MediumPhotons,
+) -> Vec<PixelEstimate> {
+    eye.par_iter()
+        .with_min_len(64)
+        .map(|e| match e.point {
+            Some(vp) if in_medium(&vp) => media.estimate(e, &vp),
+            Some(vp) => surfaces.estimate(e, surfaces.sum_at(&vp)),
+            None => surfaces.estimate(e, PhotonSums::default()),
+        })
+        .collect()
+}
