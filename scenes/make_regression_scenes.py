@@ -260,7 +260,25 @@ def rainbow_scene():
     gltf.write("rainbow")
 
 
+def fog_spot_scene():
+    """A spot light straight down through a glass ball into fog over a floor: the beam, the ball's
+    shadow in it and the bright cone the ball focuses (a volumetric caustic), seen from the side."""
+    gltf = Gltf()
+    glass = glass_material(gltf, "Glass", {"glass": "BK7"})
+    positions, normals, indices = uv_sphere(0.5, 64, 32)
+    gltf.indexed_mesh("Ball", [[x, y + 2.0, z] for x, y, z in positions], normals, indices, glass)
+    spot(gltf, [0.0, 4.0, 0.0], [0.0, -1.0, 0.0], 14.0, 3000.0)
+    gltf.extension("KHR_materials_specular")
+    floor = dict(WHITE, name="Floor", pbrMetallicRoughness=dict(WHITE["pbrMetallicRoughness"], baseColorFactor=[0.5, 0.5, 0.5, 1]))
+    gltf.mesh("Floor", quad([0.0, 0.0, 0.0], [0, 0, 1], [1, 0, 0], 4.0, 4.0), gltf.material(floor))
+    camera(gltf, [0.0, 1.9, 6.0], [0.0, -0.08, -1.0], 0.75, aspect=4 / 3)
+    gltf.doc["scenes"][0]["extras"] = {"caustic": {"resolution": [320, 240], "fog": {
+        "scattering": [0.12, 0.12, 0.12], "absorption": [0.01, 0.01, 0.01], "anisotropy": 0.2}}}
+    gltf.write("fog_spot")
+
+
 if __name__ == "__main__":
     prism_scene("prism", {"glass": "SF11"}, None)
     prism_scene("prism_constant", None, SF11_N_D)
     rainbow_scene()
+    fog_spot_scene()

@@ -144,6 +144,7 @@ fn volume_seed() -> Value {
     let mut water = volume([0.6, 0.8, 0.9], 0.0, 1.0, 0);
     water["extras"]["caustic"]["medium"] =
         json!({"absorption": [0.2, 0.1, 0.05], "scattering": [0.5, 0.6, 0.8], "anisotropy": 0.4});
+    water["extensions"].as_object_mut().unwrap().remove("KHR_materials_volume");
     let water = gltf.material(water);
     gltf.mesh("Water", &common::box_triangles([-1.0, -0.5, -1.0], [1.0, 0.5, 1.0]), water);
     let pane = gltf.material(volume([0.9, 0.5, 0.2], 0.3, 0.05, 0));

@@ -239,3 +239,20 @@ fn impossible_media_are_refused() {
         assert!(text.contains("material '") && text.contains(field) && !text.contains("panicked"), "{text}");
     }
 }
+
+/// A medium on a material light never enters (no transmission) is named in a warning, and one
+/// beside `KHR_materials_volume` says it replaces its attenuation.
+#[test]
+fn media_that_are_not_rendered_are_named() {
+    let dir = tempfile::tempdir().unwrap();
+    let path = write_edited(&bundled_scene("furnace.gltf"), dir.path(), |doc| {
+        doc["materials"][0]["extras"] = json!({"caustic": {"medium": {"scattering": [1.0, 1.0, 1.0]}}});
+        doc["materials"][0]["extensions"]["KHR_materials_volume"] =
+            json!({"attenuationColor": [0.5, 0.5, 0.5], "attenuationDistance": 1.0, "thicknessFactor": 1.0});
+    });
+    let warnings = caustic::scene::Description::load(&path).unwrap().warnings;
+    let name = load_json(&path)["materials"][0]["name"].as_str().unwrap_or("unnamed").to_string();
+    let about = |part: &str| warnings.iter().any(|w| w.contains(&format!("'{name}'")) && w.contains(part));
+    assert!(about("medium is not rendered: light does not enter"), "{warnings:?}");
+    assert!(about("its `caustic` medium replaces it"), "{warnings:?}");
+}

@@ -13,6 +13,7 @@ use std::f32::consts::{FRAC_1_PI, PI};
 const ISOTROPIC: f32 = 1e-3;
 
 /// The phase function's value for `wo` and `wi`.
+#[inline(never)]
 pub fn eval(g: f32, wo: Vec3, wi: Vec3) -> f32 {
     of_cosine(g, -wo.dot(wi))
 }
@@ -24,7 +25,9 @@ pub fn of_cosine(g: f32, cos: f32) -> f32 {
 }
 
 /// A direction `wi` drawn in proportion to the function for `wo`, from the uniform pair `u` (the
-/// function itself is its density).
+/// function itself is its density). Kept out of line, as [`eval`] is: surfaces' BSDF matches,
+/// which every path runs, stay as small as they were without media.
+#[inline(never)]
 pub fn sample(g: f32, wo: Vec3, u: Vec2) -> Vec3 {
     let cos = if g.abs() < ISOTROPIC {
         1.0 - 2.0 * u.x

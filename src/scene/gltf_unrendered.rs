@@ -31,6 +31,7 @@ pub fn material_warnings(m: &gltf::Material) -> Vec<String> {
         .collect();
     unrendered.extend(unrendered_textures(m));
     unrendered.extend(unrendered_volume(m));
+    unrendered.extend(unrendered_medium(m));
     unrendered.into_iter().map(|what| format!("material '{name}': {what}")).collect()
 }
 
@@ -55,6 +56,32 @@ fn unrendered_volume(m: &gltf::Material) -> Vec<String> {
     }
     if volume.get("thicknessTexture").is_some() {
         unrendered.push("KHR_materials_volume's thicknessTexture is not read (a closed mesh's geometry gives the path length, a thin wall's thicknessFactor)".into());
+    }
+    unrendered
+}
+
+/// What of `m`'s `caustic` medium is not rendered: all of it where light never enters (no
+/// transmission); and `KHR_materials_volume`'s attenuation, which the medium replaces.
+fn unrendered_medium(m: &gltf::Material) -> Vec<String> {
+    let has_medium = m
+        .extras()
+        .as_ref()
+        .and_then(|raw| serde_json::from_str::<serde_json::Value>(raw.get()).ok())
+        .is_some_and(|extras| extras["caustic"]["medium"].is_object());
+    if !has_medium {
+        return Vec::new();
+    }
+    let mut unrendered = Vec::new();
+    if !m.transmission().is_some_and(|t| t.transmission_factor() > 0.0) {
+        unrendered.push(
+            "its `caustic` medium is not rendered: light does not enter a material without transmission"
+                .into(),
+        );
+    }
+    if m.extension_value("KHR_materials_volume").is_some() {
+        unrendered.push(
+            "KHR_materials_volume's attenuation is not rendered: its `caustic` medium replaces it".into(),
+        );
     }
     unrendered
 }

@@ -16,21 +16,22 @@ use super::free_flight::equiangular;
 use super::renderer::Renderer;
 use super::see_through;
 use crate::materials::{Bsdf, ShadingFrame, Volume};
-use crate::sampling::PixelSampler;
 use crate::spectrum::{SampledSpectrum, Wavelengths};
 
 /// The direct light `volume` scatters toward `-direction` along the segment from `origin` of
-/// `length` (infinite where it leaves the scene), per unit of throughput, at `lambda`.
+/// `length` (infinite where it leaves the scene), per unit of throughput, at `lambda`, from the
+/// uniform numbers `u` (drawn by the caller, all of them, so that what follows on the path does
+/// not depend on where this estimate stopped). Out of line: the eye path's loop, which scenes
+/// without media run, keeps its state in registers.
+#[inline(never)]
 pub fn in_scattered(
     renderer: &Renderer,
     lambda: &Wavelengths,
     (origin, direction, length): (Vec3, Vec3, f32),
     volume: &Volume,
-    rng: &mut PixelSampler,
+    u: [f32; 4],
 ) -> SampledSpectrum {
-    // Every number is drawn, used or not, so that what follows on the path does not depend on
-    // where this estimate stopped.
-    let (u_light, u_along, u_point) = (rng.next_1d(), rng.next_1d(), rng.next_2d());
+    let (u_light, u_along, u_point) = (u[0], u[1], glam::Vec2::new(u[2], u[3]));
     let Some((scattering, anisotropy)) = volume.scattering(lambda) else { return SampledSpectrum::ZERO };
     let Some((index, p_choice)) = renderer.light_choice.sample(u_light) else { return SampledSpectrum::ZERO };
     let light = &renderer.scene.lights[index];

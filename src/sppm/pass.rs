@@ -7,7 +7,7 @@ use super::gather::{gather, PhotonSet};
 use super::photon_sampling::visible_points;
 use super::renderer::{collect_counting, PassSamples, PassStats, PixelEstimate, Renderer};
 use super::visible::{trace_eye_path, EyeResult};
-use super::volume_gather::{gather_with_media, split_photons, MediumPhotons};
+use super::volume_gather::{gather_with_media, in_media};
 
 impl Renderer<'_> {
     /// Renders pass `index`: one estimate per pixel, in row-major order.
@@ -26,19 +26,16 @@ impl Renderer<'_> {
             None => self.trace_photons(&pass, visible_points(&points)),
         };
         let photon_ns = lap();
-        let estimates;
-        let grid_ns;
-        if self.has_scattering {
-            let (surfaces, media) = split_photons(photons);
-            let set = PhotonSet::new(&surfaces, pass.radius, &self.scene.open_edges);
-            let media = MediumPhotons::new(media, pass.volume_radius, pass.radius);
-            grid_ns = lap();
-            estimates = gather_with_media(&points, &set, &media);
-        } else {
-            let set = PhotonSet::new(&photons, pass.radius, &self.scene.open_edges);
-            grid_ns = lap();
-            estimates = gather(&points, &set);
-        }
+        let (photons, media) = match self.has_scattering {
+            true => in_media(photons, &pass),
+            false => (photons, None),
+        };
+        let set = PhotonSet::new(&photons, pass.radius, &self.scene.open_edges);
+        let grid_ns = lap();
+        let estimates = match &media {
+            None => gather(&points, &set),
+            Some(media) => gather_with_media(&points, &set, media),
+        };
         let stages = PassStats { stage_ns: [eye_ns, photon_ns, grid_ns, lap()], ..PassStats::default() };
         (pass, estimates, eye_stats + photon_stats + stages)
     }

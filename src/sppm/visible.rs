@@ -156,38 +156,25 @@ pub fn continue_eye_path(
         let hit = renderer.accel.intersect(state.origin.into(), state.direction.into(), f32::INFINITY);
         let length = hit.map_or(f32::INFINITY, |h| h.t);
         watch(EyeEvent::Segment(&state, length));
-        let medium = renderer.has_volumes.then(|| state.media.medium(scene)).flatten();
-        let flight =
-            medium.filter(|v| v.scatters()).map(|v| Flight::new(v, &pass.wavelengths, state.hero_only));
-        // In a medium that scatters: the direct light it scatters along the segment, and where
-        // the path's free flight ends (beyond the segment where it passes).
-        let event = match (medium, flight) {
-            (Some(volume), Some(flight)) => {
-                let segment = (state.origin.into(), state.direction.into(), length);
-                let light = in_scattered(renderer, &pass.wavelengths, segment, volume, &mut state.rng);
-                state.radiance += state.beta * light;
-                flight.draw(state.rng.next_1d())
-            }
-            _ => f32::INFINITY,
-        };
-        // What the medium keeps of light over a distance short of the event.
-        let kept = |distance: f32| match (medium, flight) {
-            (_, Some(flight)) => flight.pass_weight(distance),
-            (Some(volume), None) => volume.transmittance(&pass.wavelengths, distance),
-            (None, _) => SampledSpectrum::ONE,
+        let medium = match renderer.has_volumes {
+            true => eye_medium(renderer, &pass.wavelengths, &mut state, length),
+            false => EyeMedium::None,
         };
         if !state.lights_sampled && !scene.sphere_lights.is_empty() {
-            let reach = length.min(event);
+            let kept = |distance| medium.kept(&pass.wavelengths, distance);
+            let reach = medium.reach(length);
             state.radiance += state.beta * spheres_seen(renderer, &state, reach, &pass.wavelengths, kept);
         }
-        if let (Some(volume), Some(flight), true) = (medium, flight, event < length) {
-            state.beta *= flight.event_weight(event);
-            point = Some(medium_point(&state, volume, event, &pass.wavelengths));
-            radiance_before = state.radiance;
-            break;
+        if let EyeMedium::Scattering(volume, flight, event) = medium {
+            if event < length {
+                state.beta *= flight.event_weight(event);
+                point = Some(medium_point(&state, volume, event, &pass.wavelengths));
+                radiance_before = state.radiance;
+                break;
+            }
         }
-        if medium.is_some() {
-            state.beta *= kept(length);
+        if !matches!(medium, EyeMedium::None) {
+            state.beta *= medium.kept(&pass.wavelengths, length);
         }
         let Some(hit) = hit else {
             if state.camera_ray && scene.transparent_film {
@@ -285,6 +272,60 @@ fn spheres_seen(
         .filter(|(_, sphere, _)| sphere.seen_by_camera || !state.camera_ray)
         .map(|(_, sphere, t)| sphere.radiance(-direction, lambda) * kept(t))
         .sum()
+}
+
+/// The medium an eye segment runs through.
+#[derive(Clone, Copy)]
+enum EyeMedium<'s> {
+    /// None: light goes on unchanged.
+    None,
+    /// One that only absorbs.
+    Absorbing(&'s Volume),
+    /// One that scatters: the path's free flight there, and the distance it drew to its event
+    /// (beyond the segment where the path passes).
+    Scattering(&'s Volume, Flight, f32),
+}
+
+impl EyeMedium<'_> {
+    /// What it keeps of light over `distance`, short of any event (over the probability of
+    /// passing it, where an event was drawn).
+    fn kept(&self, lambda: &Wavelengths, distance: f32) -> SampledSpectrum {
+        match self {
+            EyeMedium::None => SampledSpectrum::ONE,
+            EyeMedium::Absorbing(volume) => volume.transmittance(lambda, distance),
+            EyeMedium::Scattering(_, flight, _) => flight.pass_weight(distance),
+        }
+    }
+
+    /// How far along a segment of `length` the path sees.
+    fn reach(&self, length: f32) -> f32 {
+        match self {
+            EyeMedium::Scattering(_, _, event) => length.min(*event),
+            _ => length,
+        }
+    }
+}
+
+/// The medium the eye path of `state` runs through along its segment of `length`; in one that
+/// scatters, the direct light it scatters toward the path along the segment is added to the path's
+/// radiance, and the free flight's event drawn.
+#[inline(always)]
+fn eye_medium<'s>(
+    renderer: &Renderer<'s>,
+    lambda: &Wavelengths,
+    state: &mut EyeState,
+    length: f32,
+) -> EyeMedium<'s> {
+    let Some(volume) = state.media.medium(renderer.scene) else { return EyeMedium::None };
+    if !volume.scatters() {
+        return EyeMedium::Absorbing(volume);
+    }
+    let rng = &mut state.rng;
+    let u = [rng.next_1d(), rng.next_1d(), rng.next_1d(), rng.next_1d()];
+    let segment = (state.origin.into(), state.direction.into(), length);
+    state.radiance += state.beta * in_scattered(renderer, lambda, segment, volume, u);
+    let flight = Flight::new(volume, lambda, state.hero_only);
+    EyeMedium::Scattering(volume, flight, flight.draw(state.rng.next_1d()))
 }
 
 /// The visible point of an eye path whose free flight from `state` ends `t` along its segment in
