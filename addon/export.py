@@ -3,7 +3,10 @@ the `caustic` extras (docs/extras.md) by the exporter's hooks while Caustic expo
 the sun's angle, point lights' radius, spot lights' blend, lights' colour temperature, the camera's depth of field, the shutter, the frame
 rate, the resolution (with its percentage), the active camera, the world (its colour, an
 Environment Texture's image written beside the scene as a linear EXR, or an image of any other
-world baked by Blender: `bake_world`), dispersion and volume priorities; and a glass's volume absorption as `KHR_materials_volume` (`volume_absorption`).
+world baked by Blender: `bake_world`), dispersion and volume priorities; a glass's volume absorption
+as `KHR_materials_volume` (`volume_absorption`); a volume that scatters as a `caustic` medium
+(`volume_medium`, with a clear boundary where a volume object has no surface), and the world's
+volume as the scene's fog (`world_fog`).
 
 The hooks change nothing in the user's data: they add extras to what is being written, and
 complete two values of the layers the exporter leaves out (`complete_layers`). Lights with a colour
@@ -300,6 +303,9 @@ def scene_extras(scene, world):
         extras["shutter"] = {"length_frames": r.motion_blur_shutter, "position": r.motion_blur_position}
     if world is not None:
         extras["world"] = world
+    fog = world_fog(scene.world)
+    if fog is not None:
+        extras["fog"] = fog
     return extras
 
 
@@ -494,20 +500,82 @@ def volume_absorption(material):
     return {"attenuationColor": [math.exp(-k) for k in per_density], "attenuationDistance": 1.0 / density}
 
 
+def volume_medium(node):
+    """A volume node that scatters (a Volume Scatter, or a Principled Volume of some colour and
+    density) as a `caustic` medium, converted as Cycles defines it: a Volume Scatter scatters
+    `Color * Density` per unit of length and absorbs nothing; a Principled Volume scatters
+    `Color * Density` and absorbs `(1 - Color)(1 - sqrt(Absorption Color)) * Density` (each factor
+    at least 0); both with Henyey-Greenstein's anisotropy. None for other nodes and where nothing
+    scatters (a Volume Absorption travels as KHR_materials_volume, exactly)."""
+    if node is None or node.type not in ('VOLUME_SCATTER', 'PRINCIPLED_VOLUME'):
+        return None
+    colour = [max(c, 0.0) for c in node.inputs["Color"].default_value[:3]]
+    density = max(node.inputs["Density"].default_value, 0.0)
+    scattering = [c * density for c in colour]
+    if max(scattering) <= 0.0:
+        return None
+    absorption = [0.0, 0.0, 0.0]
+    if node.type == 'PRINCIPLED_VOLUME':
+        tint = node.inputs["Absorption Color"].default_value[:3]
+        absorption = [max(1.0 - c, 0.0) * max(1.0 - math.sqrt(max(a, 0.0)), 0.0) * density
+                      for c, a in zip(colour, tint)]
+    anisotropy = min(max(node.inputs["Anisotropy"].default_value, -0.99), 0.99)
+    return {"absorption": absorption, "scattering": scattering, "anisotropy": anisotropy}
+
+
 def add_volume(gltf_material, material):
-    """Writes the material's volume absorption as `KHR_materials_volume`, keeping the thickness
-    factor the exporter wrote (from a glTF Material Output node) or 1 (glTF reads 0 as no volume;
-    the factor matters only on open meshes, which render as thin walls of that thickness)."""
+    """Writes the material's volume: one that scatters as a `caustic` medium (with a clear
+    boundary of index 1 where the material has no surface, as a Blender volume object has none),
+    one that only absorbs as `KHR_materials_volume`, keeping the thickness factor the exporter
+    wrote (from a glTF Material Output node) or 1 (glTF reads 0 as no volume; the factor matters
+    only on open meshes, which render as thin walls of that thickness)."""
+    from io_scene_gltf2.io.com.gltf2_io_extensions import Extension
+    extensions = gltf_material.extensions or {}
+    medium = volume_medium(volume_node(material))
+    if medium is not None:
+        extras = gltf_material.extras if isinstance(gltf_material.extras, dict) else {}
+        gltf_material.extras = {**extras, "caustic": {**extras.get("caustic", {}), "medium": medium}}
+        extensions.pop("KHR_materials_volume", None)
+        if surface_node(material) is None:
+            extensions["KHR_materials_transmission"] = Extension(
+                "KHR_materials_transmission", {"transmissionFactor": 1.0}, required=False)
+            extensions["KHR_materials_ior"] = Extension("KHR_materials_ior", {"ior": 1.0}, required=False)
+            pbr = gltf_material.pbr_metallic_roughness
+            if pbr is not None:
+                pbr.base_color_factor, pbr.metallic_factor, pbr.roughness_factor = [1.0, 1.0, 1.0, 1.0], 0.0, 0.0
+        gltf_material.extensions = extensions
+        return
     absorption = volume_absorption(material)
     if absorption is None:
         return
-    from io_scene_gltf2.io.com.gltf2_io_extensions import Extension
-    extensions = gltf_material.extensions or {}
     written = extensions.get("KHR_materials_volume")
     thickness = written.extension.get("thicknessFactor", 1.0) if written is not None else 1.0
     extension = {**absorption, "thicknessFactor": thickness}
     extensions["KHR_materials_volume"] = Extension("KHR_materials_volume", extension, required=False)
     gltf_material.extensions = extensions
+
+
+def world_volume_node(world):
+    """The node that feeds the world's active output's volume, or None."""
+    if world is None or world.node_tree is None:
+        return None
+    output = next((n for n in world.node_tree.nodes if n.type == 'OUTPUT_WORLD' and n.is_active_output), None)
+    return output.inputs["Volume"].links[0].from_node if output and output.inputs["Volume"].links else None
+
+
+def world_fog(world):
+    """The world's volume (a Volume Scatter, Volume Absorption or Principled Volume on the World
+    Output's Volume) as the scene's `fog`, or None. Like Cycles' world volume, it fills all space,
+    so the world's light and suns do not reach the scene through it."""
+    node = world_volume_node(world)
+    if node is None:
+        return None
+    medium = volume_medium(node)
+    if medium is None and node.type == 'VOLUME_ABSORPTION':
+        density = max(node.inputs["Density"].default_value, 0.0)
+        absorption = [max(1.0 - c, 0.0) * density for c in node.inputs["Color"].default_value[:3]]
+        medium = {"absorption": absorption} if max(absorption) > 0.0 else None
+    return medium
 
 
 def complete_layers(gltf_material, material):
@@ -558,21 +626,37 @@ def principled_node(material):
     return surface if surface is not None and surface.type == 'BSDF_PRINCIPLED' else None
 
 
+def volume_node_warnings(node, name):
+    """What of the volume node `node` (feeding `name`, a material or the world) Caustic does not
+    render, as sentences."""
+    if node.type not in ('VOLUME_ABSORPTION', 'VOLUME_SCATTER', 'PRINCIPLED_VOLUME'):
+        return [f"{name}: its volume ({node.name}) is not rendered (Volume Absorption, Volume Scatter and a "
+                "Principled Volume are)"]
+    warnings = [f"{name}: the volume's {socket.name} is linked; its unlinked value is rendered"
+                for socket in node.inputs
+                if socket.name in ("Color", "Density", "Absorption Color", "Anisotropy") and socket.is_linked]
+    if node.type == 'VOLUME_SCATTER' and node.phase != 'HENYEY_GREENSTEIN':
+        warnings.append(f"{name}: the Volume Scatter's {node.phase.replace('_', '-').title()} phase is rendered as "
+                        "Henyey-Greenstein of its Anisotropy")
+    if node.type == 'PRINCIPLED_VOLUME':
+        glows = node.inputs["Emission Strength"].default_value > 0 or node.inputs["Blackbody Intensity"].default_value > 0
+        if glows:
+            warnings.append(f"{name}: the Principled Volume's emission and blackbody are not rendered")
+    if node.type in ('VOLUME_SCATTER', 'PRINCIPLED_VOLUME') and abs(node.inputs["Anisotropy"].default_value) > 0.99:
+        warnings.append(f"{name}: the volume's Anisotropy is rendered at 0.99 (Henyey-Greenstein needs |g| < 1)")
+    return warnings
+
+
+def world_volume_warnings(world):
+    """What of the world's volume Caustic does not render, as sentences."""
+    node = world_volume_node(world)
+    return [] if node is None else volume_node_warnings(node, f"world '{world.name}'")
+
+
 def volume_warnings(material):
     """What of `material`'s volume Caustic does not render, as sentences."""
     node = volume_node(material)
-    if node is None:
-        return []
-    name = f"material '{material.name}'"
-    if node.type not in ('VOLUME_ABSORPTION', 'PRINCIPLED_VOLUME'):
-        return [f"{name}: its volume ({node.name}) is not rendered (Volume Absorption and a Principled Volume's "
-                "absorption are)"]
-    warnings = [f"{name}: the volume's {socket.name} is linked; its unlinked value is rendered"
-                for socket in node.inputs if socket.name in ("Color", "Density", "Absorption Color") and socket.is_linked]
-    if node.type == 'PRINCIPLED_VOLUME' and node.inputs["Density"].default_value > 0 and \
-            max(node.inputs["Color"].default_value[:3]) > 0:
-        warnings.append(f"{name}: the Principled Volume's scattering is not rendered (its absorption is)")
-    return warnings
+    return [] if node is None else volume_node_warnings(node, f"material '{material.name}'")
 
 
 def material_warnings(material):
@@ -612,6 +696,7 @@ def scene_warnings(depsgraph):
     materials = {slot.material for obj in depsgraph.scene.objects if obj.type == 'MESH'
                  for slot in obj.material_slots if slot.material is not None}
     warnings = [w for m in sorted(materials, key=lambda m: m.name) for w in material_warnings(m)]
+    warnings += world_volume_warnings(depsgraph.scene.world)
     warnings += camera_warnings(depsgraph.scene)
     warnings += animated.unrendered_warnings(depsgraph.scene)
     for light in {obj.data for obj in depsgraph.scene.objects if obj.type == 'LIGHT'}:

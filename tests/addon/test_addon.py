@@ -393,10 +393,13 @@ class Export(unittest.TestCase):
         bpy.ops.export_scene.gltf(filepath=str(own), export_format='GLTF_SEPARATE', export_extras=True)
         self.assertNotIn("caustic", own.read_text())
 
-    def test_volume_absorption_travels_as_khr_materials_volume_converted_exactly(self):
+    def test_volumes_travel_converted_exactly(self):
         """A Volume Absorption node (Color C, Density D) on a glass becomes KHR_materials_volume with
         attenuation distance 1/D and colour exp(-(1 - C)), which keeps exp(-(1 - C) D) per unit of
-        length as Cycles does; a Principled Volume's absorption likewise, its scattering warned of."""
+        length as Cycles does. A Principled Volume that scatters becomes a `caustic` medium
+        (scattering Color * Density, absorption (1 - Color)(1 - sqrt(Absorption Color)) * Density);
+        a Volume Scatter on an object without a surface becomes a medium inside a clear boundary of
+        index 1; the world's Volume Scatter becomes the scene's fog; and Caustic reads them all."""
         scene = glass_sphere_scene()
         glass = bpy.data.materials["Glass"]
         nodes, links = glass.node_tree.nodes, glass.node_tree.links
@@ -412,22 +415,53 @@ class Export(unittest.TestCase):
         volume.inputs["Density"].default_value = 2.0
         principled.node_tree.links.new(volume.outputs["Volume"],
                                        principled.node_tree.nodes["Material Output"].inputs["Volume"])
+        haze = material("Haze")
+        add(bpy.ops.mesh.primitive_cube_add, haze, size=0.5, location=(-2, 0, 0.25))
+        output = haze.node_tree.nodes["Material Output"]
+        for link in list(output.inputs["Surface"].links):
+            haze.node_tree.links.remove(link)
+        scatter = haze.node_tree.nodes.new("ShaderNodeVolumeScatter")
+        scatter.inputs["Color"].default_value = (0.8, 0.9, 1.0, 1.0)
+        scatter.inputs["Density"].default_value = 0.5
+        scatter.inputs["Anisotropy"].default_value = 0.3
+        haze.node_tree.links.new(scatter.outputs["Volume"], output.inputs["Volume"])
+        world = bpy.data.worlds.new("Foggy")
+        scene.world = world
+        fog = world.node_tree.nodes.new("ShaderNodeVolumeScatter")
+        fog.inputs["Color"].default_value = (1.0, 1.0, 1.0, 1.0)
+        fog.inputs["Density"].default_value = 0.05
+        world_output = next(n for n in world.node_tree.nodes if n.type == 'OUTPUT_WORLD')
+        world.node_tree.links.new(fog.outputs["Volume"], world_output.inputs["Volume"])
         path = OUT / "volume" / "scene.gltf"
         path.parent.mkdir()
-        sys.modules["caustic.export"].export(scene, path)
-        materials = {m["name"]: m for m in json.loads(path.read_text())["materials"]}
+        try:
+            sys.modules["caustic.export"].export(scene, path)
+            warnings = sys.modules["caustic.export"].scene_warnings(bpy.context.evaluated_depsgraph_get())
+        finally:
+            scene.world = None
+        gltf = json.loads(path.read_text())
+        materials = {m["name"]: m for m in gltf["materials"]}
         written = materials["Glass"]["extensions"]["KHR_materials_volume"]
         np.testing.assert_allclose(written["attenuationColor"], np.exp(-(1 - np.array([0.2, 0.6, 0.9]))), rtol=1e-6)
         self.assertAlmostEqual(written["attenuationDistance"], 0.25, places=6)
         self.assertGreater(written["thicknessFactor"], 0)
-        smoky = materials["Smoky"]["extensions"]["KHR_materials_volume"]
-        k = 0.5 * (1 - np.sqrt([0.25, 0.64, 1.0]))
-        np.testing.assert_allclose(smoky["attenuationColor"], np.exp(-k), rtol=1e-6)
-        self.assertAlmostEqual(smoky["attenuationDistance"], 0.5, places=6)
-        warnings = sys.modules["caustic.export"].scene_warnings(bpy.context.evaluated_depsgraph_get())
-        self.assertIn("material 'Smoky': the Principled Volume's scattering is not rendered (its absorption is)",
-                      warnings)
-        self.assertFalse([w for w in warnings if "'Glass'" in w], warnings)
+        smoky = materials["Smoky"]
+        self.assertNotIn("KHR_materials_volume", smoky.get("extensions", {}))
+        medium = smoky["extras"]["caustic"]["medium"]
+        np.testing.assert_allclose(medium["scattering"], [1.0, 1.0, 1.0], rtol=1e-6)
+        np.testing.assert_allclose(medium["absorption"], 0.5 * (1 - np.sqrt([0.25, 0.64, 1.0])) * 2.0, atol=1e-6)
+        hazy = materials["Haze"]
+        np.testing.assert_allclose(hazy["extras"]["caustic"]["medium"]["scattering"], [0.4, 0.45, 0.5], rtol=1e-6)
+        self.assertAlmostEqual(hazy["extras"]["caustic"]["medium"]["anisotropy"], 0.3, places=6)
+        self.assertEqual(hazy["extensions"]["KHR_materials_transmission"]["transmissionFactor"], 1.0)
+        self.assertEqual(hazy["extensions"]["KHR_materials_ior"]["ior"], 1.0)
+        np.testing.assert_allclose(gltf["scenes"][0]["extras"]["caustic"]["fog"]["scattering"], [0.05] * 3, rtol=1e-6)
+        self.assertFalse([w for w in warnings if "volume" in w or "Volume" in w], warnings)
+        info = json.loads(subprocess.run([BINARY, "info", str(path)], check=True,
+                                         capture_output=True, text=True).stdout)
+        self.assertTrue(info["needs"]["scattering"])
+        self.assertEqual(sorted(m["material"] for m in info["media"]["materials"]), ["Glass", "Haze", "Smoky"])
+        self.assertAlmostEqual(info["media"]["fog"]["scattering_550nm"], 0.05, places=4)
 
     def test_what_is_not_rendered_of_lights_and_cameras_is_named(self):
         scene = glass_sphere_scene()
