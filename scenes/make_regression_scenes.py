@@ -267,7 +267,7 @@ def fog_spot_scene():
     glass = glass_material(gltf, "Glass", {"glass": "BK7"})
     positions, normals, indices = uv_sphere(0.5, 64, 32)
     gltf.indexed_mesh("Ball", [[x, y + 2.0, z] for x, y, z in positions], normals, indices, glass)
-    spot(gltf, [0.0, 4.0, 0.0], [0.0, -1.0, 0.0], 14.0, 3000.0)
+    spot(gltf, [0.0, 4.0, 0.0], [0.0, -1.0, 0.0], 14.0, 12000.0)
     gltf.extension("KHR_materials_specular")
     floor = dict(WHITE, name="Floor", pbrMetallicRoughness=dict(WHITE["pbrMetallicRoughness"], baseColorFactor=[0.5, 0.5, 0.5, 1]))
     gltf.mesh("Floor", quad([0.0, 0.0, 0.0], [0, 0, 1], [1, 0, 0], 4.0, 4.0), gltf.material(floor))

@@ -1,7 +1,7 @@
 //! The insides a path is in, as a stack of the transmissive closed meshes' materials it has
-//! refracted into and not yet out of: each segment is attenuated by the absorbing volume
+//! refracted into and not yet out of: each segment runs through the medium
 //! ([`crate::materials::Volume`]) of the inside of highest priority among them (of equal
-//! priorities, the one entered last; a clear one absorbs nothing), so a clear ice cube in tinted
+//! priorities, the one entered last; a clear one holds none), so a clear ice cube in tinted
 //! water absorbs nothing, and where water and its glass overlap (a water surface modelled into
 //! the glass wall, as artists do to avoid coincident faces) the priority says which fills the
 //! overlap.
