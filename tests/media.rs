@@ -226,41 +226,28 @@ fn impossible_media_are_refused() {
         (json!({"scattering": [1.0, 1.0, 1.0], "anisotropy": -1.5}), "anisotropy"),
         (json!({"density": 2.0}), "density"),
     ];
+    // What rendering `scene` into `out` printed, after checking it failed without a panic.
+    let refusal = |scene: &Path, out: &str| {
+        let out = dir.path().join(out);
+        let args =
+            [scene.to_str().unwrap(), "-o", out.to_str().unwrap(), "--passes", "1", "--resolution", "8x8"];
+        let output = run_caustic(&[&["render"][..], &args, &["--progress", "none"]].concat());
+        let text = String::from_utf8_lossy(&output.stderr).to_string();
+        assert!(
+            !output.status.success() && !text.contains("panicked"),
+            "{} rendered: {text}",
+            scene.display()
+        );
+        text
+    };
     for (i, (medium, field)) in cases.into_iter().enumerate() {
-        let fog = furnace_with_fog(dir.path(), medium.clone());
-        let output = run_caustic(&[
-            "render",
-            fog.to_str().unwrap(),
-            "-o",
-            dir.path().join(format!("fog{i}")).to_str().unwrap(),
-            "--passes",
-            "1",
-            "--resolution",
-            "8x8",
-            "--progress",
-            "none",
-        ]);
-        let text = String::from_utf8_lossy(&output.stderr);
-        assert!(!output.status.success(), "fog {medium} rendered");
-        assert!(text.contains("fog") && text.contains(field) && !text.contains("panicked"), "{text}");
+        let text = refusal(&furnace_with_fog(dir.path(), medium.clone()), &format!("fog{i}"));
+        assert!(text.contains("fog") && text.contains(field), "{medium}: {text}");
         let material = write_edited(&bundled_scene("furnace.gltf"), dir.path(), |doc| {
             doc["materials"][0]["extras"] = json!({"caustic": {"medium": medium.clone()}});
         });
-        let output = run_caustic(&[
-            "render",
-            material.to_str().unwrap(),
-            "-o",
-            dir.path().join(format!("m{i}")).to_str().unwrap(),
-            "--passes",
-            "1",
-            "--resolution",
-            "8x8",
-            "--progress",
-            "none",
-        ]);
-        let text = String::from_utf8_lossy(&output.stderr);
-        assert!(!output.status.success(), "material medium {medium} rendered");
-        assert!(text.contains("material '") && text.contains(field) && !text.contains("panicked"), "{text}");
+        let text = refusal(&material, &format!("m{i}"));
+        assert!(text.contains("material '") && text.contains(field), "{medium}: {text}");
     }
 }
 

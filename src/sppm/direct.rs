@@ -106,13 +106,7 @@ impl DirectLight<'_> {
         let origin = offset_origin(point.p, ng, sample.wi, point.scale());
         let t_max = if sample.distance.is_finite() { sample.distance * (1.0 - 1e-4) } else { f32::INFINITY };
         let ray = ShadowRay { origin, direction: sample.wi, t_max };
-        let through = if renderer.has_cut_away_surfaces {
-            see_through::transmittance(renderer, wavelengths, origin, sample.wi, t_max)
-        } else if renderer.accel.occluded(origin, sample.wi, t_max) {
-            0.0
-        } else {
-            1.0
-        };
+        let through = see_through::visibility(renderer, wavelengths, origin, sample.wi, t_max);
         if through <= 0.0 {
             return DirectTerm::ZERO;
         }

@@ -44,13 +44,7 @@ pub fn in_scattered(
     let wo = -direction;
     let phase = Bsdf::Medium { scattering, anisotropy }.eval(ShadingFrame::new(wo, wo), wo, sample.wi);
     let t_max = sample.distance * (1.0 - 1e-4);
-    let through = if renderer.has_cut_away_surfaces {
-        see_through::transmittance(renderer, lambda, x, sample.wi, t_max)
-    } else if renderer.accel.occluded(x, sample.wi, t_max) {
-        0.0
-    } else {
-        1.0
-    };
+    let through = see_through::visibility(renderer, lambda, x, sample.wi, t_max);
     if through <= 0.0 {
         return SampledSpectrum::ZERO;
     }

@@ -3,7 +3,7 @@
 //! the light is multiplied by `1 - opacity` at each, which needs no random number and is what
 //! eye and photon paths, choosing to pass with that probability, give on average).
 //!
-//! Scenes without such materials never come here: they test shadow rays with one any-hit query.
+//! Scenes without such materials test shadow rays with one any-hit query ([`visibility`]).
 
 use glam::Vec3;
 
@@ -15,9 +15,27 @@ use crate::spectrum::Wavelengths;
 /// More cut-away surfaces than this along one ray are taken as blocking it.
 const MAX_CROSSINGS: u32 = 64;
 
+/// How much of the light along a shadow ray from `origin` along `direction` reaches `t_max`:
+/// 0 or 1 where no material's alpha cuts any surface away, else [`transmittance`].
+pub fn visibility(
+    renderer: &Renderer,
+    lambda: &Wavelengths,
+    origin: Vec3,
+    direction: Vec3,
+    t_max: f32,
+) -> f32 {
+    if renderer.has_cut_away_surfaces {
+        transmittance(renderer, lambda, origin, direction, t_max)
+    } else if renderer.accel.occluded(origin, direction, t_max) {
+        0.0
+    } else {
+        1.0
+    }
+}
+
 /// The share of light that reaches `t_max` along a ray from `origin` (0 where an opaque surface
 /// blocks it), for shadow rays of scenes with cut-away surfaces.
-pub fn transmittance(
+fn transmittance(
     renderer: &Renderer,
     lambda: &Wavelengths,
     origin: Vec3,
