@@ -41,7 +41,6 @@ pub use inputs::{vertex_colour, SurfaceInputs};
 pub use layer_albedo::{eta_of_f0, f0_of_eta};
 pub use material::{Alpha, BaseColour, Coverage, Lobe, Material, Specular, SMOOTH_ROUGHNESS};
 pub use normal_map::NormalMap;
-pub use phase::of_cosine as phase_of_cosine;
 pub use plastic::{Coat, Plastic};
 pub use rough_dielectric::RoughDielectric;
 pub use rough_thin_dielectric::RoughThinDielectric;

@@ -21,8 +21,8 @@ use crate::spectrum::{SampledSpectrum, Wavelengths};
 /// The direct light `volume` scatters toward `-direction` along the segment from `origin` of
 /// `length` (infinite where it leaves the scene), per unit of throughput, at `lambda`, from the
 /// uniform numbers `u` (drawn by the caller, all of them, so that what follows on the path does
-/// not depend on where this estimate stopped). Out of line: the eye path's loop, which scenes
-/// without media run, keeps its state in registers.
+/// not depend on where this estimate stopped). Out of line, so that the eye path's loop, which
+/// scenes without media run, stays as small as it was.
 #[inline(never)]
 pub fn in_scattered(
     renderer: &Renderer,

@@ -8,7 +8,7 @@
 //! before it is traced and resume the path later from any saved state, drawing exactly the random
 //! numbers it would have drawn (reuse across frames needs both).
 
-use glam::{Vec2, Vec3, Vec3A};
+use glam::{Vec3, Vec3A};
 
 use rayon::prelude::*;
 
@@ -19,6 +19,7 @@ use crate::geometry::offset_origin;
 use crate::lights::SoftFalloff;
 use crate::materials::{Bsdf, ShadingFrame, Transport, Volume};
 use crate::sampling::{stream, Sampler, Stream, Uniforms};
+use crate::scene::Scene;
 use crate::spectrum::{hero_only, SampledSpectrum, Wavelengths, LANES};
 
 /// A stored photon.
@@ -139,44 +140,15 @@ pub fn continue_photon<R: Uniforms>(
         // What the medium it crossed absorbed joins the roulette's weight below, so that photons
         // in a dark volume end rather than carry ever less flux.
         let mut kept = SampledSpectrum::ONE;
-        if let Some(volume) = renderer.has_volumes.then(|| state.media.medium(scene)).flatten() {
-            if !volume.scatters() {
-                kept = volume.transmittance(&pass.wavelengths, length);
-            } else {
-                match Flight::new(volume, &pass.wavelengths, state.hero_only)
-                    .cross(length, state.rng.next_1d())
-                {
-                    Crossing::Passed { weight } => kept = weight,
-                    Crossing::Event { t, weight } => {
-                        watch(&state, t, out.len() - first_stored);
-                        let direction = Vec3::from(state.direction);
-                        let p = Vec3::from(state.origin) + direction * t;
-                        if let Some(soft) = state.soft_falloff.take() {
-                            state.flux *= soft.at(p);
-                        }
-                        if state.scattered {
-                            let flux = state.flux * weight;
-                            out.push(Photon {
-                                p,
-                                wi: -direction,
-                                ng: Vec3::ZERO,
-                                flux,
-                                hero_only: state.hero_only,
-                            });
-                            stats.photons_stored += 1;
-                        }
-                        let u = [state.rng.next_1d(), state.rng.next_1d(), state.rng.next_1d()];
-                        let Some((wi, carried)) =
-                            scatter_in_medium(volume, &pass.wavelengths, direction, weight, u)
-                        else {
-                            break;
-                        };
-                        state.flux *= carried;
-                        state.origin = p.into();
-                        state.direction = wi.into();
-                        state.depth += 1;
-                        state.scattered = true;
-                        continue;
+        if renderer.has_volumes {
+            match medium_segment(scene, &mut state, length, &pass.wavelengths) {
+                Segment::Kept(through) => kept = through,
+                Segment::Event(volume, event) => {
+                    watch(&state, event.0, out.len() - first_stored);
+                    let lambda = &pass.wavelengths;
+                    match scatter_in_medium(&mut state, volume, event, lambda, out, &mut stats) {
+                        true => continue,
+                        false => break,
                     }
                 }
             }
@@ -238,26 +210,76 @@ pub fn continue_photon<R: Uniforms>(
     stats
 }
 
-/// A photon travelling along `direction` scattered at an event of weight `weight`
-/// ([`Crossing::Event`]) in `volume`, which scatters, from the uniform numbers `u`: its new
-/// direction, drawn from the phase function, and the factor on its flux (the event's weight times
-/// the scattering coefficient, over the Russian roulette's probability of going on); `None` where
-/// the roulette ends it. Out of line: the photon's loop, which scenes without media run, keeps its
-/// state in registers.
-#[inline(never)]
-fn scatter_in_medium(
-    volume: &Volume,
+/// What a photon's segment of `length` met in the medium it is in.
+enum Segment<'s> {
+    /// No event: what the medium kept of its light (all of it outside media).
+    Kept(SampledSpectrum),
+    /// An event in `volume`, which scatters: its distance and weight ([`Crossing::Event`]).
+    Event(&'s Volume, (f32, SampledSpectrum)),
+}
+
+/// The medium of `scene` the photon of `state` is in, met along its segment of `length` (where it
+/// scatters, an event drawn from the photon's stream).
+fn medium_segment<'s, R: Uniforms>(
+    scene: &'s Scene,
+    state: &mut PhotonState<R>,
+    length: f32,
     lambda: &Wavelengths,
-    direction: Vec3,
-    weight: SampledSpectrum,
-    u: [f32; 3],
-) -> Option<(Vec3, SampledSpectrum)> {
-    let (scattering, anisotropy) = volume.scattering(lambda)?;
+) -> Segment<'s> {
+    let Some(volume) = state.media.medium(scene) else { return Segment::Kept(SampledSpectrum::ONE) };
+    if !volume.scatters() {
+        return Segment::Kept(volume.transmittance(lambda, length));
+    }
+    match Flight::new(volume, lambda, state.hero_only).cross(length, state.rng.next_1d()) {
+        Crossing::Event { t, weight } => Segment::Event(volume, (t, weight)),
+        Crossing::Passed { weight } => Segment::Kept(weight),
+    }
+}
+
+/// A photon's event `t` along its segment through `volume`, which scatters, its throughput
+/// weighed by `weight` ([`Crossing::Event`]): stores the photon there (after a first scattering:
+/// light that comes straight from a light is next-event estimation's) and scatters it by the
+/// phase function, or ends it by Russian roulette (`false`).
+fn scatter_in_medium<R: Uniforms>(
+    state: &mut PhotonState<R>,
+    volume: &Volume,
+    (t, weight): (f32, SampledSpectrum),
+    lambda: &Wavelengths,
+    out: &mut Vec<Photon>,
+    stats: &mut PassStats,
+) -> bool {
+    let direction = Vec3::from(state.direction);
+    let p = Vec3::from(state.origin) + direction * t;
+    if let Some(soft) = state.soft_falloff.take() {
+        state.flux *= soft.at(p);
+    }
+    if state.scattered {
+        out.push(Photon {
+            p,
+            wi: -direction,
+            ng: Vec3::ZERO,
+            flux: state.flux * weight,
+            hero_only: state.hero_only,
+        });
+        stats.photons_stored += 1;
+    }
+    let Some((scattering, anisotropy)) = volume.scattering(lambda) else { return false };
     let wo = -direction;
     let phase = Bsdf::Medium { scattering, anisotropy };
-    let sample =
-        phase.sample(ShadingFrame::new(wo, wo), wo, Vec2::new(u[0], u[1]), 0.0, Transport::Importance)?;
+    let Some(sample) =
+        phase.sample(ShadingFrame::new(wo, wo), wo, state.rng.next_2d(), 0.0, Transport::Importance)
+    else {
+        return false;
+    };
     let carried = weight * sample.weight;
     let survive = (carried.element_sum() / LANES as f32).min(1.0);
-    (u[2] < survive).then(|| (sample.wi, carried / survive))
+    if state.rng.next_1d() >= survive {
+        return false;
+    }
+    state.flux *= carried / survive;
+    state.origin = p.into();
+    state.direction = sample.wi.into();
+    state.depth += 1;
+    state.scattered = true;
+    true
 }
