@@ -161,9 +161,8 @@ pub fn continue_eye_path(
             false => EyeMedium::None,
         };
         if !state.lights_sampled && !scene.sphere_lights.is_empty() {
-            let kept = |distance| medium.kept(&pass.wavelengths, distance);
-            let reach = medium.reach(length);
-            state.radiance += state.beta * spheres_seen(renderer, &state, reach, &pass.wavelengths, kept);
+            state.radiance +=
+                state.beta * spheres_seen(renderer, &state, (length, medium), &pass.wavelengths);
         }
         if let EyeMedium::Scattering(volume, flight, event) = medium {
             if event < length {
@@ -173,9 +172,7 @@ pub fn continue_eye_path(
                 break;
             }
         }
-        if !matches!(medium, EyeMedium::None) {
-            state.beta *= medium.kept(&pass.wavelengths, length);
-        }
+        state.beta *= medium.kept(&pass.wavelengths, length);
         let Some(hit) = hit else {
             if state.camera_ray && scene.transparent_film {
                 coverage = 0.0;
@@ -255,22 +252,21 @@ pub fn continue_eye_path(
     (EyeEnd { result, radiance_before, direct }, stats)
 }
 
-/// The radiance of the sphere lights an eye segment from `state` meets within `reach` (the
-/// camera's own ray sees only those visible to the camera), each times what the medium `kept`
-/// of it over its distance.
+/// The radiance of the sphere lights an eye segment from `state` of `length` through `medium`
+/// meets before any event there (the camera's own ray sees only those visible to the camera),
+/// each times what the medium keeps of it over its distance.
 fn spheres_seen(
     renderer: &Renderer,
     state: &EyeState,
-    reach: f32,
+    (length, medium): (f32, EyeMedium),
     lambda: &Wavelengths,
-    kept: impl Fn(f32) -> SampledSpectrum,
 ) -> SampledSpectrum {
     let direction = Vec3::from(state.direction);
     renderer
         .scene
-        .spheres_met(state.origin.into(), direction, reach)
+        .spheres_met(state.origin.into(), direction, medium.reach(length))
         .filter(|(_, sphere, _)| sphere.seen_by_camera || !state.camera_ray)
-        .map(|(_, sphere, t)| sphere.radiance(-direction, lambda) * kept(t))
+        .map(|(_, sphere, t)| sphere.radiance(-direction, lambda) * medium.kept(lambda, t))
         .sum()
 }
 
