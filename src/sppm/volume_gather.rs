@@ -33,6 +33,8 @@ pub struct MediumPhotons {
     sorted: Vec<Photon>,
     grid: PhotonGrid,
     radius: f32,
+    /// The kernel's normalisation, `105 / (32 pi r^3)`.
+    kernel_scale: f32,
     /// The factor that turns the Laplacian sum into the film's bias term (see the module notes).
     laplacian_scale: f32,
 }
@@ -44,9 +46,11 @@ impl MediumPhotons {
         let positions: Vec<Vec3> = photons.iter().map(|p| p.p).collect();
         let (grid, order) = PhotonGrid::build(&positions, radius);
         let sorted = order.iter().map(|&i| photons[i as usize]).collect();
-        let kernel = 105.0 / (32.0 * PI * radius * radius * radius);
+        let r2 = radius * radius;
+        let kernel_scale = 105.0 / (32.0 * PI * r2 * radius);
         let bias_term = 8.0 / 9.0 * (radius / surface_radius).powi(2);
-        MediumPhotons { sorted, grid, radius, laplacian_scale: kernel * -4.0 / (radius * radius) * bias_term }
+        let laplacian_scale = kernel_scale * -4.0 / r2 * bias_term;
+        MediumPhotons { sorted, grid, radius, kernel_scale, laplacian_scale }
     }
 
     /// The pixel's estimate at `vp`, a point in a medium.
@@ -67,9 +71,8 @@ impl MediumPhotons {
                 laplacian += weighted * (3.0 - 5.0 * t2);
             }
         });
-        let scale = 105.0 / (32.0 * PI * r2 * self.radius);
         PixelEstimate {
-            radiance: eye.radiance + vp.beta * kernel * scale,
+            radiance: eye.radiance + vp.beta * kernel * self.kernel_scale,
             laplacian: vp.beta * laplacian * self.laplacian_scale,
             coverage: eye.coverage,
         }
