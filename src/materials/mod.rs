@@ -23,7 +23,7 @@ mod layering;
 mod material;
 mod microfacet;
 mod normal_map;
-mod phase;
+pub mod phase;
 mod plastic;
 mod rough_dielectric;
 mod rough_thin_dielectric;

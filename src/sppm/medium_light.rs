@@ -1,8 +1,8 @@
 //! Direct light scattered toward the eye along an eye segment through a medium that scatters
 //! (single scattering), by next-event estimation: a light chosen by power, a point on the segment
 //! drawn by equiangular sampling toward the light's centre (`free_flight.rs`), and a point on the
-//! light seen from there through the medium. Light that has scattered before is the photons'
-//! (`volume_gather.rs`), gathered where the eye path's own free flight ends in the medium.
+//! light seen from there through the medium. Light that has scattered before is the photons',
+//! gathered along the same segment as a beam (`beams.rs`).
 //!
 //! Equiangular sampling follows the inverse square of the distance to a point, spot or sphere
 //! light, so a beam in thin fog near its lamp is found where its light is; for an area or an

@@ -4,6 +4,7 @@
 //! estimate for pass `i`, which depends only on (scene, settings, seed, i): passes are
 //! independent (Knaus & Zwicker 2011), so any pass range can be rendered anywhere and summed.
 
+mod beams;
 mod direct;
 mod footprint;
 mod free_flight;
@@ -21,7 +22,6 @@ mod renderer;
 mod see_through;
 mod shared;
 mod visible;
-mod volume_gather;
 
 pub use footprint::ViewMeasure;
 pub use guides::Guide;

@@ -3,11 +3,11 @@
 
 use std::time::Instant;
 
+use super::beams::{add_beams, in_media, Beam};
 use super::gather::{gather, PhotonSet};
 use super::photon_sampling::visible_points;
 use super::renderer::{collect_counting, PassSamples, PassStats, PixelEstimate, Renderer};
-use super::visible::{trace_eye_path, EyeResult};
-use super::volume_gather::{gather_with_media, in_media};
+use super::visible::{continue_eye_path, start_eye_path, trace_eye_path, EyeEvent, EyeResult};
 
 impl Renderer<'_> {
     /// Renders pass `index`: one estimate per pixel, in row-major order.
@@ -19,7 +19,13 @@ impl Renderer<'_> {
             clock = Instant::now();
             ns
         };
-        let (points, eye_stats) = self.trace_visible_points(&pass);
+        let (points, beams, eye_stats) = match self.has_scattering {
+            true => self.trace_visible_points_and_beams(&pass),
+            false => {
+                let (points, stats) = self.trace_visible_points(&pass);
+                (points, Vec::new(), stats)
+            }
+        };
         let eye_ns = lap();
         let (photons, photon_stats) = match self.whole_image_points(&pass) {
             Some(whole) => self.trace_photons(&pass, visible_points(&whole)),
@@ -27,17 +33,38 @@ impl Renderer<'_> {
         };
         let photon_ns = lap();
         let (photons, media) = match self.has_scattering {
-            true => in_media(photons, &pass),
+            true => in_media(photons, pass.radius),
             false => (photons, None),
         };
         let set = PhotonSet::new(&photons, pass.radius, &self.scene.open_edges);
         let grid_ns = lap();
-        let estimates = match &media {
-            None => gather(&points, &set),
-            Some(media) => gather_with_media(&points, &set, media),
-        };
+        let mut estimates = gather(&points, &set);
+        if let Some(media) = &media {
+            add_beams(&mut estimates, &beams, media);
+        }
         let stages = PassStats { stage_ns: [eye_ns, photon_ns, grid_ns, lap()], ..PassStats::default() };
         (pass, estimates, eye_stats + photon_stats + stages)
+    }
+
+    /// Every pixel's eye path, and its segments through media that scatter as beams.
+    #[inline(never)]
+    fn trace_visible_points_and_beams(
+        &self,
+        pass: &PassSamples,
+    ) -> (Vec<EyeResult>, Vec<Vec<Beam>>, PassStats) {
+        let pixels = (self.settings.width * self.settings.height) as usize;
+        let (paths, stats) = collect_counting(pixels, |pixel| {
+            let (state, start_stats) = start_eye_path(self, pass, pixel);
+            let mut beams = Vec::new();
+            let (end, stats) = continue_eye_path(self, pass, state, |event| {
+                if let EyeEvent::Segment(state, length) = event {
+                    beams.extend(Beam::along(self.scene, &pass.wavelengths, state, length));
+                }
+            });
+            ((end.result, beams), start_stats + stats)
+        });
+        let (points, beams) = paths.into_iter().unzip();
+        (points, beams, stats)
     }
 
     pub(super) fn trace_visible_points(&self, pass: &PassSamples) -> (Vec<EyeResult>, PassStats) {

@@ -151,10 +151,8 @@ impl SppmSettings {
             None => Wavelengths::sampled(pass_sample(self.seed, index)),
         };
         let r1_squared = self.initial_radius * self.initial_radius;
-        let radius_squared = radius::radius_squared(r1_squared, self.alpha, index + 1);
-        let radius = radius_squared.sqrt() as f32;
-        let volume_radius = (self.initial_radius * (radius_squared / r1_squared).cbrt()) as f32;
-        PassSamples { index, wavelengths, radius, volume_radius }
+        let radius = radius::radius_squared(r1_squared, self.alpha, index + 1).sqrt() as f32;
+        PassSamples { index, wavelengths, radius }
     }
 }
 
@@ -165,11 +163,8 @@ pub struct PassSamples {
     pub index: u64,
     /// The wavelengths every path carries.
     pub wavelengths: Wavelengths,
-    /// The gather radius.
+    /// The gather radius, on surfaces and across beams in media.
     pub radius: f32,
-    /// The gather radius in media: Knaus & Zwicker's sequence in three dimensions (the sphere's
-    /// volume, not the disc's area, shrinks by the same factor a pass).
-    pub volume_radius: f32,
 }
 
 /// One pixel's estimate for one pass, at the pass's wavelengths.

@@ -26,12 +26,11 @@
 use glam::{Vec2, Vec3, Vec3A};
 
 use super::direct::{DirectLight, DirectTerm, ShadowRay};
-use super::free_flight::Flight;
 use super::media::Media;
 use super::medium_light::in_scattered;
 use super::renderer::{PassSamples, PassStats, Renderer, VisiblePoint, MAX_DEPTH};
 use crate::geometry::offset_origin;
-use crate::materials::{Bsdf, Lobe, ShadingFrame, Transport, Volume};
+use crate::materials::{transmittance, Bsdf, Lobe, Transport};
 use crate::sampling::{pixel_stream, PixelSampler};
 use crate::spectrum::{hero_only, SampledSpectrum, Wavelengths};
 
@@ -156,23 +155,17 @@ pub fn continue_eye_path(
         let hit = renderer.accel.intersect(state.origin.into(), state.direction.into(), f32::INFINITY);
         let length = hit.map_or(f32::INFINITY, |h| h.t);
         watch(EyeEvent::Segment(&state, length));
-        let medium = match renderer.has_volumes {
-            true => eye_medium(renderer, &pass.wavelengths, &mut state, length),
-            false => EyeMedium::None,
+        let extinction = match renderer.has_volumes {
+            true => through_medium(renderer, &pass.wavelengths, &mut state, length),
+            false => None,
         };
         if !state.lights_sampled && !scene.sphere_lights.is_empty() {
             state.radiance +=
-                state.beta * spheres_seen(renderer, &state, (length, medium), &pass.wavelengths);
+                state.beta * spheres_seen(renderer, &state, (length, extinction), &pass.wavelengths);
         }
-        if let EyeMedium::Scattering(volume, flight, event) = medium {
-            if event < length {
-                state.beta *= flight.event_weight(event);
-                point = Some(medium_point(&state, volume, event, &pass.wavelengths));
-                radiance_before = state.radiance;
-                break;
-            }
+        if let Some(extinction) = extinction {
+            state.beta *= transmittance(extinction, length);
         }
-        state.beta *= medium.kept(&pass.wavelengths, length);
         let Some(hit) = hit else {
             if state.camera_ray && scene.transparent_film {
                 coverage = 0.0;
@@ -252,95 +245,47 @@ pub fn continue_eye_path(
     (EyeEnd { result, radiance_before, direct }, stats)
 }
 
-/// The radiance of the sphere lights an eye segment from `state` of `length` through `medium`
-/// meets before any event there (the camera's own ray sees only those visible to the camera),
-/// each times what the medium keeps of it over its distance.
+/// The radiance of the sphere lights an eye segment from `state` of `length` meets (the
+/// camera's own ray sees only those visible to the camera), each times what the medium it runs
+/// through, of extinction `extinction` (none outside media), keeps of it over its distance.
 fn spheres_seen(
     renderer: &Renderer,
     state: &EyeState,
-    (length, medium): (f32, EyeMedium),
+    (length, extinction): (f32, Option<SampledSpectrum>),
     lambda: &Wavelengths,
 ) -> SampledSpectrum {
     let direction = Vec3::from(state.direction);
     renderer
         .scene
-        .spheres_met(state.origin.into(), direction, medium.reach(length))
+        .spheres_met(state.origin.into(), direction, length)
         .filter(|(_, sphere, _)| sphere.seen_by_camera || !state.camera_ray)
-        .map(|(_, sphere, t)| sphere.radiance(-direction, lambda) * medium.kept(lambda, t))
+        .map(|(_, sphere, t)| {
+            sphere.radiance(-direction, lambda)
+                * extinction.map_or(SampledSpectrum::ONE, |e| transmittance(e, t))
+        })
         .sum()
 }
 
-/// The medium an eye segment runs through.
-#[derive(Clone, Copy)]
-enum EyeMedium<'s> {
-    /// None: light goes on unchanged.
-    None,
-    /// One that only absorbs.
-    Absorbing(&'s Volume),
-    /// One that scatters: the path's free flight there, and the distance it drew to its event
-    /// (beyond the segment where the path passes).
-    Scattering(&'s Volume, Flight, f32),
-}
-
-impl EyeMedium<'_> {
-    /// What it keeps of light over `distance`, short of any event (over the probability of
-    /// passing it, where an event was drawn).
-    fn kept(&self, lambda: &Wavelengths, distance: f32) -> SampledSpectrum {
-        match self {
-            EyeMedium::None => SampledSpectrum::ONE,
-            EyeMedium::Absorbing(volume) => volume.transmittance(lambda, distance),
-            EyeMedium::Scattering(_, flight, _) => flight.pass_weight(distance),
-        }
-    }
-
-    /// How far along a segment of `length` the path sees.
-    fn reach(&self, length: f32) -> f32 {
-        match self {
-            EyeMedium::Scattering(_, _, event) => length.min(*event),
-            _ => length,
-        }
-    }
-}
-
-/// The medium the eye path of `state` runs through along its segment of `length`; in one that
-/// scatters, the direct light it scatters toward the path along the segment is added to the path's
-/// radiance, and the free flight's event drawn.
+/// The extinction coefficient of the medium the eye path of `state` runs through along its segment
+/// of `length` (`None` outside media). In one that scatters, the direct light it
+/// scatters toward the path along the segment is added to the path's radiance; the light it
+/// scatters there that has scattered before is the photons', gathered along the segment as a
+/// beam (`beams.rs`).
 #[inline(always)]
-fn eye_medium<'s>(
-    renderer: &Renderer<'s>,
+fn through_medium(
+    renderer: &Renderer,
     lambda: &Wavelengths,
     state: &mut EyeState,
     length: f32,
-) -> EyeMedium<'s> {
-    let Some(volume) = state.media.medium(renderer.scene) else { return EyeMedium::None };
-    if !volume.scatters() {
-        return EyeMedium::Absorbing(volume);
+) -> Option<SampledSpectrum> {
+    let volume = state.media.medium(renderer.scene)?;
+    if volume.scatters() {
+        let rng = &mut state.rng;
+        let u = [rng.next_1d(), rng.next_1d(), rng.next_1d(), rng.next_1d()];
+        let segment = (state.origin.into(), state.direction.into(), length);
+        state.radiance += state.beta * in_scattered(renderer, lambda, segment, volume, u);
     }
-    let rng = &mut state.rng;
-    let u = [rng.next_1d(), rng.next_1d(), rng.next_1d(), rng.next_1d()];
-    let segment = (state.origin.into(), state.direction.into(), length);
-    state.radiance += state.beta * in_scattered(renderer, lambda, segment, volume, u);
-    let flight = Flight::new(volume, lambda, state.hero_only);
-    EyeMedium::Scattering(volume, flight, flight.draw(state.rng.next_1d()))
-}
-
-/// The visible point of an eye path whose free flight from `state` ends `t` along its segment in
-/// `volume`: photons in the medium are gathered there, by the phase function.
-fn medium_point(state: &EyeState, volume: &Volume, t: f32, lambda: &Wavelengths) -> VisiblePoint {
-    let direction = Vec3::from(state.direction);
-    let p = Vec3::from(state.origin) + direction * t;
-    let (scattering, anisotropy) = volume.scattering(lambda).unwrap_or_default();
-    let wo = -direction;
-    let bsdf = Bsdf::Medium { scattering, anisotropy };
-    VisiblePoint::new(
-        p,
-        ShadingFrame::new(wo, wo),
-        wo,
-        bsdf,
-        state.beta,
-        state.hero_only,
-        p.abs().max_element(),
-    )
+    Some(volume.extinction(lambda))
 }
 
 /// The radiance of an eye path: what it found before its visible point plus the direct light

@@ -1,0 +1,219 @@
+//! The gather in media by beams (Jarosz, Zwicker & Jensen 2008's beam radiance estimate, with
+//! Knaus & Zwicker 2011's radius sequence): every segment of an eye path through a medium that
+//! scatters is a beam, and the photons stored in media within the pass radius of it give the
+//! radiance scattered toward the eye along its whole length.
+//!
+//! Along a beam from `o` in direction `d`, the in-scattered radiance is `integral of T(t)
+//! sigma_s L_s(o + t d) dt`, and a 3-D density estimate of `L_s` integrated along the line is a
+//! 2-D one across it: each photon within `r` of the line counts once, at its projection `t_p`,
+//! weighted by the 2-D biweight of its distance from the line (`K(s) = 3 / (pi r^2) (1 - s^2)^2`,
+//! `s = d / r`: the surfaces' kernel, so the radius is the pass's, the Laplacian the disc's and
+//! the film's bias term holds as written), the phase function, the scattering coefficient and what
+//! the medium keeps of light from the beam's start to `t_p`.
+//!
+//! Why beams rather than a point per pass (the eye path ending at a free-flight event, where the
+//! photons within a sphere of Knaus & Zwicker's 3-D radius were gathered; this replaced it):
+//! measured at equal CPU time on `scenes/fog_spot.gltf` at 160 x 120 against a reference of 2048
+//! passes, the beams' relative MSE was 30x lower at 6.5 CPU s (0.025 against 0.74) and 26x lower
+//! at 60 (0.0064 against 0.165), though a pass took twice as long: a point finds the few photons
+//! of one sphere where the eye path happened to stop, which in thin fog is rarely in the light,
+//! while a beam finds every photon along the path. The error bound covered 94% of pixels at 90%
+//! confidence with beams, 86% with points. (Inside a dense milky ball, where the eye path stops
+//! soon, see the README's media section.)
+//!
+//! The photons of a pass stored in media are sorted into a balanced tree of boxes
+//! ([`PointTree`]); a beam visits the leaves whose boxes it crosses, so one leaving the scene
+//! through fog that fills the world ends where the photons do.
+
+use glam::Vec3;
+use rayon::prelude::*;
+use std::f32::consts::PI;
+
+use super::photons::Photon;
+use super::renderer::PixelEstimate;
+use super::visible::EyeState;
+use crate::materials::{phase, transmittance, Volume};
+use crate::scene::Scene;
+use crate::spectrum::{SampledSpectrum, Wavelengths, LANES};
+
+/// An eye path's segment through a medium that scatters.
+#[derive(Clone, Copy, Debug)]
+pub struct Beam {
+    origin: Vec3,
+    direction: Vec3,
+    /// Its length (infinite where it leaves the scene).
+    length: f32,
+    /// The eye path's throughput at its start.
+    beta: SampledSpectrum,
+    /// The path carries its hero wavelength alone.
+    hero_only: bool,
+    extinction: SampledSpectrum,
+    scattering: SampledSpectrum,
+    anisotropy: f32,
+}
+
+impl Beam {
+    /// The beam of the eye segment from `state` of `length`, if it runs through a medium that
+    /// scatters.
+    pub fn along(scene: &Scene, lambda: &Wavelengths, state: &EyeState, length: f32) -> Option<Beam> {
+        let volume: &Volume = state.media.medium(scene)?;
+        let (scattering, anisotropy) = volume.scattering(lambda)?;
+        Some(Beam {
+            origin: state.origin.into(),
+            direction: state.direction.into(),
+            length,
+            beta: state.beta,
+            hero_only: state.hero_only,
+            extinction: volume.extinction(lambda),
+            scattering,
+            anisotropy,
+        })
+    }
+
+    /// Whether it crosses the box `(lo, hi)` (`inverse`: its direction's reciprocal).
+    fn crosses(&self, (lo, hi): (Vec3, Vec3), inverse: Vec3) -> bool {
+        let a = (lo - self.origin) * inverse;
+        let b = (hi - self.origin) * inverse;
+        let near = a.min(b).max_element().max(0.0);
+        let far = a.max(b).min_element().min(self.length);
+        near <= far
+    }
+}
+
+/// A pass's photons stored in media, in a tree of boxes for beams of one radius.
+pub struct BeamPhotons {
+    tree: PointTree,
+    radius: f32,
+    /// The kernel's normalisation, `3 / (pi r^2)`.
+    kernel_scale: f32,
+}
+
+impl BeamPhotons {
+    /// Sorts `photons` into a tree for beams of radius `radius`.
+    pub fn new(photons: Vec<Photon>, radius: f32) -> Self {
+        BeamPhotons {
+            tree: PointTree::new(photons, radius),
+            radius,
+            kernel_scale: 3.0 / (PI * radius * radius),
+        }
+    }
+
+    /// The radiance `beam` scatters toward its start, and the same sum with the kernel's
+    /// Laplacian in its place.
+    fn estimate(&self, beam: &Beam) -> (SampledSpectrum, SampledSpectrum) {
+        let r2 = self.radius * self.radius;
+        let hero_only_scale = if beam.hero_only { 1.0 / LANES as f32 } else { 1.0 };
+        let wo = -beam.direction;
+        let (mut kernel, mut laplacian) = (SampledSpectrum::ZERO, SampledSpectrum::ZERO);
+        self.tree.for_each_along(beam, |photon| {
+            let v = photon.p - beam.origin;
+            let t = v.dot(beam.direction);
+            // Across the beam (not |v|^2 - t^2, which cancels far along it).
+            let d2 = (v - beam.direction * t).length_squared();
+            if t < 0.0 || t >= beam.length || d2 >= r2 {
+                return;
+            }
+            let flux = if photon.hero_only { photon.flux * hero_only_scale } else { photon.flux };
+            let weighted =
+                flux * (phase::eval(beam.anisotropy, wo, photon.wi) * transmittance(beam.extinction, t));
+            let s2 = d2 / r2;
+            kernel += weighted * ((1.0 - s2) * (1.0 - s2));
+            laplacian += weighted * (1.0 - 2.0 * s2);
+        });
+        let scale = beam.beta * beam.scattering * self.kernel_scale;
+        (kernel * scale, laplacian * (scale * (-8.0 / r2)))
+    }
+}
+
+/// Photons in a balanced binary tree of boxes: each node holds a range of them, split at its
+/// middle after ordering them along the node's widest axis; the tree is implicit (node `i`'s
+/// children are `2i + 1` and `2i + 2`) and its leaves hold at most [`LEAF`] photons. A beam
+/// visits the leaves whose boxes, grown by the radius, it crosses: in sparse fog it skips the
+/// empty space a grid would step through, in dense media it looks at few photons out of reach.
+struct PointTree {
+    photons: Vec<Photon>,
+    /// Each node's box, grown by the radius.
+    boxes: Vec<(Vec3, Vec3)>,
+    /// Levels below the root.
+    depth: u32,
+}
+
+/// The most photons a leaf holds.
+const LEAF: usize = 8;
+
+impl PointTree {
+    fn new(mut photons: Vec<Photon>, radius: f32) -> Self {
+        let mut depth = 0;
+        while photons.len() > LEAF << depth {
+            depth += 1;
+        }
+        let mut boxes = vec![(Vec3::INFINITY, Vec3::NEG_INFINITY); (2 << depth) - 1];
+        split(&mut photons, 0, depth, &mut boxes, radius);
+        PointTree { photons, boxes, depth }
+    }
+
+    /// Calls `visit` with every photon in a leaf whose box the beam crosses (a superset of those
+    /// within the radius of it).
+    fn for_each_along(&self, beam: &Beam, mut visit: impl FnMut(&Photon)) {
+        if self.photons.is_empty() {
+            return;
+        }
+        let inverse = (beam.direction + Vec3::ZERO).recip();
+        let mut stack = [(0usize, 0u32, 0usize, self.photons.len()); 64];
+        let mut top = 1;
+        while top > 0 {
+            top -= 1;
+            let (node, level, start, end) = stack[top];
+            if !beam.crosses(self.boxes[node], inverse) {
+                continue;
+            }
+            if level == self.depth {
+                self.photons[start..end].iter().for_each(&mut visit);
+                continue;
+            }
+            let middle = (start + end) / 2;
+            stack[top] = (2 * node + 1, level + 1, start, middle);
+            stack[top + 1] = (2 * node + 2, level + 1, middle, end);
+            top += 2;
+        }
+    }
+}
+
+/// Orders `photons` (node `node`'s, `levels` above the leaves) into the tree, and records each
+/// node's box grown by `radius`.
+fn split(photons: &mut [Photon], node: usize, levels: u32, boxes: &mut [(Vec3, Vec3)], radius: f32) {
+    let (lo, hi) =
+        photons.iter().fold((Vec3::INFINITY, Vec3::NEG_INFINITY), |(lo, hi), p| (lo.min(p.p), hi.max(p.p)));
+    boxes[node] = (lo - radius, hi + radius);
+    if levels == 0 {
+        return;
+    }
+    let axis = (hi - lo).max_position();
+    let middle = photons.len() / 2;
+    if middle > 0 {
+        photons.select_nth_unstable_by(middle, |a, b| a.p[axis].total_cmp(&b.p[axis]));
+    }
+    let (left, right) = photons.split_at_mut(middle);
+    split(left, 2 * node + 1, levels - 1, boxes, radius);
+    split(right, 2 * node + 2, levels - 1, boxes, radius);
+}
+
+/// A pass's photons stored on surfaces, and those stored in media sorted for beams of radius
+/// `radius`.
+#[inline(never)]
+pub fn in_media(photons: Vec<Photon>, radius: f32) -> (Vec<Photon>, Option<BeamPhotons>) {
+    let (surfaces, media): (Vec<Photon>, Vec<Photon>) = photons.into_iter().partition(|p| p.ng != Vec3::ZERO);
+    (surfaces, Some(BeamPhotons::new(media, radius)))
+}
+
+/// Adds to every pixel's estimate its beams' (`beams`: each pixel's, in pixel order).
+#[inline(never)]
+pub fn add_beams(estimates: &mut [PixelEstimate], beams: &[Vec<Beam>], photons: &BeamPhotons) {
+    estimates.par_iter_mut().zip(beams).with_min_len(64).for_each(|(estimate, beams)| {
+        for beam in beams {
+            let (radiance, laplacian) = photons.estimate(beam);
+            estimate.radiance += radiance;
+            estimate.laplacian += laplacian;
+        }
+    });
+}
