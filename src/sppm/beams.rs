@@ -217,3 +217,49 @@ pub fn add_beams(estimates: &mut [PixelEstimate], beams: &[Vec<Beam>], photons: 
         }
     });
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn photon(p: Vec3) -> Photon {
+        Photon { p, wi: Vec3::Y, ng: Vec3::ZERO, flux: SampledSpectrum::ONE, hero_only: false }
+    }
+
+    /// The tree hands a beam every photon within the radius of it, whatever the photons' spread
+    /// (a dense cluster and sparse far ones) and the beam's length (one leaving the scene).
+    #[test]
+    fn a_beam_visits_every_photon_within_the_radius() {
+        let mut points: Vec<Vec3> = (0..3000)
+            .map(|i| Vec3::new((i * 37 % 101) as f32, (i * 53 % 89) as f32, (i * 11 % 97) as f32) * 0.01)
+            .collect();
+        points.extend((0..200).map(|i| Vec3::new(i as f32 * 7.3 - 700.0, (i % 13) as f32 * 50.0, -300.0)));
+        let radius = 0.05;
+        let tree = PointTree::new(points.iter().map(|&p| photon(p)).collect(), radius);
+        for (origin, direction, length) in [
+            (Vec3::new(-1.0, 0.5, 0.5), Vec3::X, f32::INFINITY),
+            (Vec3::new(0.2, -3.0, 0.3), Vec3::new(0.1, 1.0, 0.05).normalize(), 4.0),
+            (Vec3::splat(0.5), Vec3::new(-1.0, 0.0, 0.0), 0.3),
+        ] {
+            let beam = Beam {
+                origin,
+                direction,
+                length,
+                beta: SampledSpectrum::ONE,
+                hero_only: false,
+                extinction: SampledSpectrum::ZERO,
+                scattering: SampledSpectrum::ONE,
+                anisotropy: 0.0,
+            };
+            let near = |p: Vec3| {
+                let t = (p - origin).dot(direction);
+                t >= 0.0 && t < length && (p - origin - direction * t).length() < radius
+            };
+            let mut found = 0;
+            tree.for_each_along(&beam, |p| found += near(p.p) as usize);
+            let expected = points.iter().filter(|&&p| near(p)).count();
+            assert!(expected > 0);
+            assert_eq!(found, expected);
+        }
+    }
+}
