@@ -367,6 +367,35 @@ def spot_glass_scene():
     set_resolution(320, 240)
 
 
+def fog_spot_scene():
+    """A spot light straight down through a glass ball into fog (the world's volume: a Volume
+    Scatter, 0.12 per unit, g 0.2) over a grey floor, seen from the side, built but not exported:
+    the beam, the ball's shadow in it and the cone the ball focuses (a volumetric caustic, which a
+    path tracer cannot find from a point light)."""
+    reset()
+    floor = material("Floor", (0.5, 0.5, 0.5))
+    plane("Floor", 8, (0, 0, 0), (0, 0, 0), floor)
+    glass_sphere((0, 0, 2.0), 0.5, glass_material())
+    bpy.ops.object.light_add(type="SPOT", location=(0, 0, 4.0))
+    spot = bpy.context.object
+    spot.data.energy = 1000.0
+    spot.data.spot_size = math.radians(28)
+    spot.data.spot_blend = 0.05
+    spot.data.shadow_soft_size = 0.0  # a point spot, as glTF's KHR_lights_punctual has it
+    fog = bpy.data.worlds.new("Fog")
+    fog.use_nodes = True
+    nodes = fog.node_tree.nodes
+    nodes["Background"].inputs["Strength"].default_value = 0.0
+    scatter = nodes.new("ShaderNodeVolumeScatter")
+    scatter.inputs["Color"].default_value = (1.0, 1.0, 1.0, 1.0)
+    scatter.inputs["Density"].default_value = 0.12
+    scatter.inputs["Anisotropy"].default_value = 0.2
+    fog.node_tree.links.new(scatter.outputs["Volume"], nodes["World Output"].inputs["Volume"])
+    bpy.context.scene.world = fog
+    camera((0, -6.0, 1.9), (0, 0, 1.4))
+    set_resolution(320, 240)
+
+
 def make_spot_glass():
     spot_glass_scene()
     export("spot_glass")
@@ -642,6 +671,97 @@ def glass_in_hall_scene(size=24.0, height=6.0, lamps=8):
     set_resolution(256, 192)
 
 
+def water_surface(size, depth, level, waves, grid=96):
+    """A closed body of water `size` m square and `depth` m deep whose top, at `level` on
+    average, is a grid of `grid` x `grid` quads raised by `waves`: (amplitude m, wavelength m,
+    direction in degrees) summed as sines."""
+    import bmesh
+    half = size / 2
+
+    def height(x, y):
+        return level + sum(a * math.sin(2 * math.pi / length * (x * math.cos(math.radians(d)) +
+                                                               y * math.sin(math.radians(d))))
+                           for a, length, d in waves)
+    mesh = bpy.data.meshes.new("Water")
+    b = bmesh.new()
+    top = [[b.verts.new((-half + size * i / grid, -half + size * j / grid,
+                         height(-half + size * i / grid, -half + size * j / grid)))
+            for j in range(grid + 1)] for i in range(grid + 1)]
+    for i in range(grid):
+        for j in range(grid):
+            b.faces.new((top[i][j], top[i + 1][j], top[i + 1][j + 1], top[i][j + 1]))
+    bottom = level - depth
+    rim = ([top[i][0] for i in range(grid + 1)] + [top[grid][j] for j in range(1, grid + 1)] +
+           [top[i][grid] for i in range(grid - 1, -1, -1)] + [top[0][j] for j in range(grid - 1, 0, -1)])
+    low = [b.verts.new((v.co.x, v.co.y, bottom)) for v in rim]
+    for k in range(len(rim)):
+        n = (k + 1) % len(rim)
+        b.faces.new((rim[k], low[k], low[n], rim[n]))
+    b.faces.new(low)
+    bmesh.ops.recalc_face_normals(b, faces=b.faces)
+    b.to_mesh(mesh)
+    b.free()
+    obj = bpy.data.objects.new("Water", mesh)
+    bpy.context.collection.objects.link(obj)
+    for polygon in mesh.polygons:
+        polygon.use_smooth = True
+    return obj
+
+
+def pool_scene():
+    """A swimming pool (4 x 4 m, 1.5 m deep) of slightly scattering, blue-green water whose
+    surface carries small waves, lit by a high sun and a blue sky and seen from its edge: the
+    sun's caustic net on the floor and walls seen through the surface, and the sun's shafts in the
+    water (the photons' through the beams: next-event estimation cannot see the sun through the
+    surface)."""
+    reset()
+    tiles = material("Tiles", (0.55, 0.75, 0.8))
+    size, depth, rim = 4.0, 1.5, 0.3
+    plane("PoolFloor", size, (0, 0, 0), (0, 0, 0), tiles)
+    for name, location, rotation in (("WallN", (0, size / 2, depth / 2 + rim / 2), (math.pi / 2, 0, 0)),
+                                     ("WallS", (0, -size / 2, depth / 2 + rim / 2), (-math.pi / 2, 0, 0)),
+                                     ("WallW", (-size / 2, 0, depth / 2 + rim / 2), (0, math.pi / 2, 0)),
+                                     ("WallE", (size / 2, 0, depth / 2 + rim / 2), (0, -math.pi / 2, 0))):
+        bpy.ops.mesh.primitive_plane_add(size=1, location=location, rotation=rotation)
+        wall = bpy.context.object
+        wall.name = name
+        wall.scale = (size, depth + rim, 1) if name in ("WallN", "WallS") else (depth + rim, size, 1)
+        wall.data.materials.append(tiles)
+    stone = material("Paving", (0.6, 0.58, 0.55))
+    for name, location, dimensions in (("PavingN", (0, size / 2 + 1.5, depth + rim), (size + 6, 3)),
+                                       ("PavingS", (0, -size / 2 - 1.5, depth + rim), (size + 6, 3)),
+                                       ("PavingW", (-size / 2 - 1.5, 0, depth + rim), (3, size)),
+                                       ("PavingE", (size / 2 + 1.5, 0, depth + rim), (3, size))):
+        bpy.ops.mesh.primitive_plane_add(size=1, location=location)
+        paving = bpy.context.object
+        paving.name = name
+        paving.scale = (*dimensions, 1)
+        paving.data.materials.append(stone)
+    # The water stops a millimetre short of the tiles, so that no face of it lies on one.
+    water = water_surface(size - 0.002, depth - 0.001, depth, [(0.012, 0.9, 20.0), (0.008, 0.55, 115.0),
+                                                               (0.005, 0.33, 250.0)])
+    water_material = material("Water", (1.0, 1.0, 1.0), roughness=0.0, transmission=1.0, ior=1.33)
+    nodes, links = water_material.node_tree.nodes, water_material.node_tree.links
+    volume = nodes.new("ShaderNodeVolumePrincipled")
+    volume.inputs["Color"].default_value = (0.5, 0.85, 1.0, 1.0)
+    volume.inputs["Density"].default_value = 0.25
+    volume.inputs["Absorption Color"].default_value = (0.2, 0.7, 0.9, 1.0)
+    output = next(n for n in nodes if n.type == 'OUTPUT_MATERIAL')
+    links.new(volume.outputs["Volume"], output.inputs["Volume"])
+    water.data.materials.append(water_material)
+    sun(65.0, 30.0, 2.0)
+    world((0.4, 0.55, 0.85), 0.3)
+    camera((0.3, -3.3, 3.0), (0.0, 0.5, 0.3), lens_mm=24.0)
+    set_resolution(320, 240)
+
+
+def make_pool():
+    """Exported through the add-on, which writes the water's medium and the world."""
+    pool_scene()
+    enable_addon()
+    export_with_addon("pool")
+
+
 def make_many_lights():
     many_lights_scene()
     export("many_lights")
@@ -666,3 +786,4 @@ if __name__ == "__main__":
     make_spot_glass()
     make_many_lights()
     make_sunlit_room()
+    make_pool()

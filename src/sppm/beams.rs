@@ -126,10 +126,12 @@ impl BeamPhotons {
 }
 
 /// Photons in a balanced binary tree of boxes: each node holds a range of them, split at its
-/// middle after ordering them along the node's widest axis; the tree is implicit (node `i`'s
-/// children are `2i + 1` and `2i + 2`) and its leaves hold at most [`LEAF`] photons. A beam
-/// visits the leaves whose boxes, grown by the radius, it crosses: in sparse fog it skips the
-/// empty space a grid would step through, in dense media it looks at few photons out of reach.
+/// middle after ordering them along the node's widest axis, and its leaves hold at most [`LEAF`]
+/// photons. The tree is implicit, its nodes in depth-first order (a node `h` levels above the
+/// leaves is followed by its left subtree, then at `2^h` after it by its right one), so that the
+/// two halves of a node are built in parallel. A beam visits the leaves whose boxes, grown by the
+/// radius, it crosses: in sparse fog it skips the empty space a grid would step through, in dense
+/// media it looks at few photons out of reach.
 struct PointTree {
     photons: Vec<Photon>,
     /// Each node's box, grown by the radius.
@@ -141,14 +143,17 @@ struct PointTree {
 /// The most photons a leaf holds.
 const LEAF: usize = 8;
 
+/// Below this many photons, a node's halves are built one after the other.
+const PARALLEL_SPLIT: usize = 4096;
+
 impl PointTree {
     fn new(mut photons: Vec<Photon>, radius: f32) -> Self {
         let mut depth = 0;
         while photons.len() > LEAF << depth {
             depth += 1;
         }
-        let mut boxes = vec![(Vec3::INFINITY, Vec3::NEG_INFINITY); (2 << depth) - 1];
-        split(&mut photons, 0, depth, &mut boxes, radius);
+        let mut boxes = vec![(Vec3::ZERO, Vec3::ZERO); (2 << depth) - 1];
+        split(&mut photons, &mut boxes, radius);
         PointTree { photons, boxes, depth }
     }
 
@@ -159,33 +164,35 @@ impl PointTree {
             return;
         }
         let inverse = (beam.direction + Vec3::ZERO).recip();
-        let mut stack = [(0usize, 0u32, 0usize, self.photons.len()); 64];
+        // (node, levels below it, its photons' range)
+        let mut stack = [(0usize, 0u32, 0usize, 0usize); 64];
+        stack[0] = (0, self.depth, 0, self.photons.len());
         let mut top = 1;
         while top > 0 {
             top -= 1;
-            let (node, level, start, end) = stack[top];
+            let (node, below, start, end) = stack[top];
             if !beam.crosses(self.boxes[node], inverse) {
                 continue;
             }
-            if level == self.depth {
+            if below == 0 {
                 self.photons[start..end].iter().for_each(&mut visit);
                 continue;
             }
             let middle = (start + end) / 2;
-            stack[top] = (2 * node + 1, level + 1, start, middle);
-            stack[top + 1] = (2 * node + 2, level + 1, middle, end);
+            stack[top] = (node + 1, below - 1, start, middle);
+            stack[top + 1] = (node + (1 << below), below - 1, middle, end);
             top += 2;
         }
     }
 }
 
-/// Orders `photons` (node `node`'s, `levels` above the leaves) into the tree, and records each
-/// node's box grown by `radius`.
-fn split(photons: &mut [Photon], node: usize, levels: u32, boxes: &mut [(Vec3, Vec3)], radius: f32) {
+/// Orders `photons` into the subtree whose nodes are `boxes` (depth-first), recording each node's
+/// box grown by `radius`.
+fn split(photons: &mut [Photon], boxes: &mut [(Vec3, Vec3)], radius: f32) {
     let (lo, hi) =
         photons.iter().fold((Vec3::INFINITY, Vec3::NEG_INFINITY), |(lo, hi), p| (lo.min(p.p), hi.max(p.p)));
-    boxes[node] = (lo - radius, hi + radius);
-    if levels == 0 {
+    boxes[0] = (lo - radius, hi + radius);
+    if boxes.len() == 1 {
         return;
     }
     let axis = (hi - lo).max_position();
@@ -193,9 +200,16 @@ fn split(photons: &mut [Photon], node: usize, levels: u32, boxes: &mut [(Vec3, V
     if middle > 0 {
         photons.select_nth_unstable_by(middle, |a, b| a.p[axis].total_cmp(&b.p[axis]));
     }
+    let parallel = photons.len() >= PARALLEL_SPLIT;
     let (left, right) = photons.split_at_mut(middle);
-    split(left, 2 * node + 1, levels - 1, boxes, radius);
-    split(right, 2 * node + 2, levels - 1, boxes, radius);
+    let children = &mut boxes[1..];
+    let (left_boxes, right_boxes) = children.split_at_mut(children.len() / 2);
+    if parallel {
+        rayon::join(|| split(left, left_boxes, radius), || split(right, right_boxes, radius));
+    } else {
+        split(left, left_boxes, radius);
+        split(right, right_boxes, radius);
+    }
 }
 
 /// A pass's photons stored on surfaces, and those stored in media sorted for beams of radius

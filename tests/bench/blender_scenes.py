@@ -24,6 +24,10 @@ SCENES = {
     "caustic": make_scenes.cornell_glass_scene,
     "diffuse": make_scenes.cornell_diffuse_scene,
     "spot": make_scenes.spot_glass_scene,
+    # A spot light through a glass ball into fog: the volumetric caustic (media).
+    "fog_spot": make_scenes.fog_spot_scene,
+    # A pool of scattering water under the sun: caustics and sun shafts seen through waves.
+    "pool": make_scenes.pool_scene,
     "frosted": frosted_glass_scene,
     # The demo with 10x its triangles (a finer sphere), for cost against scene size.
     "caustic_10x_triangles": lambda: make_scenes.cornell_glass_scene(sphere_segments=304),

@@ -10,8 +10,8 @@ test: run it by hand on an idle machine, release build first):
 Each scene is built in Blender (bpy) by scenes/make_scenes.py, exported by the add-on for Caustic
 and rendered by Cycles from the same in-memory .blend: CPU device, the same thread count,
 denoising and adaptive sampling off, a 1-pixel box filter, no glossy filter, and path lengths up
-to Caustic's 32 bounces. Budgets are CPU seconds (threads x rendering wall time; both renderers'
-times exclude loading and BVH building, as Cycles' time limit does). Cycles renders once per
+to Caustic's 32 bounces (volume bounces too). Budgets are CPU seconds (threads x rendering wall
+time; both renderers' times exclude loading and BVH building, as Cycles' time limit does). Cycles renders once per
 budget; Caustic renders once for the largest budget with `--log` and `--reference`, whose lines
 (after passes 1, 2, 4, ...) give its error along the way.
 
@@ -25,8 +25,9 @@ above that floor beside it (a ratio of raw errors understates the gap between tw
 per scene, both errors at each budget and the ratio of the time Caustic needs to reach Cycles'
 error to Cycles' time; writes OUT/results.json, OUT/error_vs_time.svg and per scene
 OUT/<scene>/sheet.png (Cycles at each budget above; Caustic below, with the reference).
-The spot scene (a point spot through glass, which Cycles cannot render) is rendered by both at
-each budget; its Caustic images and error bounds show it converging.
+The spot and fog_spot scenes (a point spot through glass, onto a floor and into fog, which
+Cycles cannot render) are rendered by both at each budget; their Caustic images and error bounds
+show them converging.
 """
 import argparse
 import datetime
@@ -70,7 +71,7 @@ def render_cycles(scene, seconds, threads, path):
     cycles.filter_width = 1.0
     cycles.blur_glossy = 0.0
     for bounces in ("max_bounces", "diffuse_bounces", "glossy_bounces", "transmission_bounces",
-                    "transparent_max_bounces"):
+                    "volume_bounces", "transparent_max_bounces"):
         setattr(cycles, bounces, 32)
     scene.render.threads_mode = 'FIXED'
     scene.render.threads = threads
