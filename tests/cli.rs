@@ -299,3 +299,38 @@ fn compare_prints_the_error_against_a_reference() {
     let output = run_caustic(&["compare", &path("missing"), "--reference", &path("flat")]);
     assert!(stderr(&output).contains("cannot read image") && stderr(&output).contains("missing.exr"));
 }
+
+/// Every scene in `scenes/` loads and renders (one pass at 8 x 6, its first frame) with nothing
+/// to warn about: what the project ships, it renders whole.
+#[test]
+fn every_bundled_scene_renders_without_a_warning() {
+    let dir = tempfile::tempdir().unwrap();
+    let scenes = Path::new(env!("CARGO_MANIFEST_DIR")).join("scenes");
+    let mut names: Vec<_> = std::fs::read_dir(&scenes)
+        .unwrap()
+        .map(|entry| entry.unwrap().path())
+        .filter(|path| path.extension().is_some_and(|e| e == "gltf"))
+        .collect();
+    names.sort();
+    assert!(names.len() >= 10, "scenes: {names:?}");
+    for scene in names {
+        let out = dir.path().join(scene.file_stem().unwrap());
+        let output = run_caustic(&[
+            "render",
+            scene.to_str().unwrap(),
+            "-o",
+            out.to_str().unwrap(),
+            "--passes",
+            "1",
+            "--resolution",
+            "8x6",
+            "--photons",
+            "64",
+            "--progress",
+            "none",
+        ]);
+        assert!(output.status.success(), "{}: {}", scene.display(), stderr(&output));
+        assert_eq!(stderr(&output), "", "{}", scene.display());
+        assert!(out.join("frame_0001.exr").exists(), "{}", scene.display());
+    }
+}
