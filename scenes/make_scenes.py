@@ -350,6 +350,18 @@ def make_furnace():
     export("furnace")
 
 
+def point_spot(location, power, size_deg, blend):
+    """A spot light pointing down from `location`: `power` W, a cone `size_deg` degrees across,
+    of radius 0 (a point spot, as glTF's KHR_lights_punctual has it)."""
+    bpy.ops.object.light_add(type="SPOT", location=location)
+    spot = bpy.context.object
+    spot.data.energy = power
+    spot.data.spot_size = math.radians(size_deg)
+    spot.data.spot_blend = blend
+    spot.data.shadow_soft_size = 0.0
+    return spot
+
+
 def spot_glass_scene():
     """A spot light through a glass sphere onto a floor, built but not exported."""
     reset()
@@ -357,12 +369,7 @@ def spot_glass_scene():
     glass = glass_material()
     plane("Floor", 6, (0, 0, 0), (0, 0, 0), floor)
     glass_sphere((0, 0, 1.0), 0.5, glass)
-    bpy.ops.object.light_add(type="SPOT", location=(0, 0, 3.0))
-    spot = bpy.context.object
-    spot.data.energy = 500.0
-    spot.data.spot_size = math.radians(40)
-    spot.data.spot_blend = 0.1
-    spot.data.shadow_soft_size = 0.0  # a point spot, as glTF's KHR_lights_punctual has it
+    point_spot((0, 0, 3.0), 500.0, 40, 0.1)
     camera((0, -4.0, 3.0), (0, 0, 0.3))
     set_resolution(320, 240)
 
@@ -376,12 +383,7 @@ def fog_spot_scene():
     floor = material("Floor", (0.5, 0.5, 0.5))
     plane("Floor", 8, (0, 0, 0), (0, 0, 0), floor)
     glass_sphere((0, 0, 2.0), 0.5, glass_material())
-    bpy.ops.object.light_add(type="SPOT", location=(0, 0, 4.0))
-    spot = bpy.context.object
-    spot.data.energy = 1000.0
-    spot.data.spot_size = math.radians(28)
-    spot.data.spot_blend = 0.05
-    spot.data.shadow_soft_size = 0.0  # a point spot, as glTF's KHR_lights_punctual has it
+    point_spot((0, 0, 4.0), 1000.0, 28, 0.05)
     fog = bpy.data.worlds.new("Fog")
     fog.use_nodes = True
     nodes = fog.node_tree.nodes

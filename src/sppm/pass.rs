@@ -33,7 +33,10 @@ impl Renderer<'_> {
         };
         let photon_ns = lap();
         let (photons, media) = match self.has_scattering {
-            true => in_media(photons, pass.radius),
+            true => {
+                let (surfaces, media) = in_media(photons, pass.radius);
+                (surfaces, Some(media))
+            }
             false => (photons, None),
         };
         let set = PhotonSet::new(&photons, pass.radius, &self.scene.open_edges);
