@@ -28,9 +28,10 @@ fn logged_render(scene: &str, passes: u64, target: Option<f64>, dir: &Path) -> V
 /// On four scenes, one of them fog (every pixel sees the medium: beams, whose 2-D kernel gives the
 /// bias term as on surfaces), the fraction of pixels whose true error lies within their 90% bound
 /// is within 10 percentage points of 90% after 256, 512 and 1024 passes (fog: measured 0.947,
-/// 0.935 and 0.931), over pixels above 1% of the mean luminance (the references' own variance is about a tenth of the render's at 1024 passes:
-/// 32 times the passes at radii 32^(1/6) times smaller. References of 8192 passes at half this
-/// radius had about the render's own variance, which alone pulls a 90% coverage down to 76%).
+/// 0.935 and 0.931), over pixels above 1% of the mean luminance. (The references' own variance is
+/// about a tenth of the render's at 1024 passes: 32 times the passes at radii 32^(1/6) times
+/// smaller. References of 8192 passes at half this radius had about the render's own variance,
+/// which alone pulls a 90% coverage down to 76%.)
 #[test]
 fn the_bound_covers_the_true_error_at_its_confidence() {
     let dir = tempfile::tempdir().unwrap();
