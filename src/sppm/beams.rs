@@ -38,35 +38,34 @@ use crate::spectrum::{SampledSpectrum, Wavelengths, LANES};
 
 /// An eye path's segment through a medium that scatters.
 #[derive(Clone, Copy, Debug)]
-pub struct Beam {
+pub struct Beam<'s> {
     origin: Vec3,
     direction: Vec3,
     /// Its length (infinite where it leaves the scene).
     length: f32,
+    /// The pixel whose eye path it is on.
+    pixel: u32,
     /// The eye path's throughput at its start.
     beta: SampledSpectrum,
     /// The path carries its hero wavelength alone.
     hero_only: bool,
-    extinction: SampledSpectrum,
-    scattering: SampledSpectrum,
-    anisotropy: f32,
+    /// The medium.
+    volume: &'s Volume,
 }
 
-impl Beam {
-    /// The beam of the eye segment from `state` of `length`, if it runs through a medium that
-    /// scatters.
-    pub fn along(scene: &Scene, lambda: &Wavelengths, state: &EyeState, length: f32) -> Option<Beam> {
-        let volume: &Volume = state.media.medium(scene)?;
-        let (scattering, anisotropy) = volume.scattering(lambda)?;
+impl<'s> Beam<'s> {
+    /// The beam of pixel `pixel`'s eye segment from `state` of `length`, if it runs through a
+    /// medium of `scene` that scatters.
+    pub fn along(scene: &'s Scene, pixel: usize, state: &EyeState, length: f32) -> Option<Beam<'s>> {
+        let volume = state.media.medium(scene).filter(|v| v.scatters())?;
         Some(Beam {
             origin: state.origin.into(),
             direction: state.direction.into(),
             length,
+            pixel: pixel as u32,
             beta: state.beta,
             hero_only: state.hero_only,
-            extinction: volume.extinction(lambda),
-            scattering,
-            anisotropy,
+            volume,
         })
     }
 
@@ -98,9 +97,13 @@ impl BeamPhotons {
         }
     }
 
-    /// The radiance `beam` scatters toward its start, and the same sum with the kernel's
-    /// Laplacian in its place.
-    fn estimate(&self, beam: &Beam) -> (SampledSpectrum, SampledSpectrum) {
+    /// The radiance `beam` scatters toward its start at `lambda`, and the same sum with the
+    /// kernel's Laplacian in its place.
+    fn estimate(&self, beam: &Beam, lambda: &Wavelengths) -> (SampledSpectrum, SampledSpectrum) {
+        let Some((scattering, anisotropy)) = beam.volume.scattering(lambda) else {
+            return (SampledSpectrum::ZERO, SampledSpectrum::ZERO);
+        };
+        let extinction = beam.volume.extinction(lambda);
         let r2 = self.radius * self.radius;
         let hero_only_scale = if beam.hero_only { 1.0 / LANES as f32 } else { 1.0 };
         let wo = -beam.direction;
@@ -114,13 +117,12 @@ impl BeamPhotons {
                 return;
             }
             let flux = if photon.hero_only { photon.flux * hero_only_scale } else { photon.flux };
-            let weighted =
-                flux * (phase::eval(beam.anisotropy, wo, photon.wi) * transmittance(beam.extinction, t));
+            let weighted = flux * (phase::eval(anisotropy, wo, photon.wi) * transmittance(extinction, t));
             let s2 = d2 / r2;
             kernel += weighted * ((1.0 - s2) * (1.0 - s2));
             laplacian += weighted * (1.0 - 2.0 * s2);
         });
-        let scale = beam.beta * beam.scattering * self.kernel_scale;
+        let scale = beam.beta * scattering * self.kernel_scale;
         (kernel * scale, laplacian * (scale * (-8.0 / r2)))
     }
 }
@@ -220,16 +222,21 @@ pub fn in_media(photons: Vec<Photon>, radius: f32) -> (Vec<Photon>, BeamPhotons)
     (surfaces, BeamPhotons::new(media, radius))
 }
 
-/// Adds to every pixel's estimate its beams' (`beams`: each pixel's, in pixel order).
+/// Adds to every pixel's estimate its beams' at `lambda` (`beams` in pixel order).
 #[inline(never)]
-pub fn add_beams(estimates: &mut [PixelEstimate], beams: &[Vec<Beam>], photons: &BeamPhotons) {
-    estimates.par_iter_mut().zip(beams).with_min_len(64).for_each(|(estimate, beams)| {
-        for beam in beams {
-            let (radiance, laplacian) = photons.estimate(beam);
-            estimate.radiance += radiance;
-            estimate.laplacian += laplacian;
-        }
-    });
+pub fn add_beams(
+    estimates: &mut [PixelEstimate],
+    beams: &[Beam],
+    photons: &BeamPhotons,
+    lambda: &Wavelengths,
+) {
+    let sums: Vec<(SampledSpectrum, SampledSpectrum)> =
+        beams.par_iter().with_min_len(64).map(|beam| photons.estimate(beam, lambda)).collect();
+    for (beam, (radiance, laplacian)) in beams.iter().zip(sums) {
+        let estimate = &mut estimates[beam.pixel as usize];
+        estimate.radiance += radiance;
+        estimate.laplacian += laplacian;
+    }
 }
 
 #[cfg(test)]
@@ -249,6 +256,7 @@ mod tests {
             .collect();
         points.extend((0..200).map(|i| Vec3::new(i as f32 * 7.3 - 700.0, (i % 13) as f32 * 50.0, -300.0)));
         let radius = 0.05;
+        let fog = Volume::medium(Vec3::ZERO, Vec3::ONE, 0.0, 0.0);
         let tree = PointTree::new(points.iter().map(|&p| photon(p)).collect(), radius);
         for (origin, direction, length) in [
             (Vec3::new(-1.0, 0.5, 0.5), Vec3::X, f32::INFINITY),
@@ -259,11 +267,10 @@ mod tests {
                 origin,
                 direction,
                 length,
+                pixel: 0,
                 beta: SampledSpectrum::ONE,
                 hero_only: false,
-                extinction: SampledSpectrum::ZERO,
-                scattering: SampledSpectrum::ONE,
-                anisotropy: 0.0,
+                volume: &fog,
             };
             let near = |p: Vec3| {
                 let t = (p - origin).dot(direction);

@@ -1,6 +1,7 @@
 //! One whole pass for one frame (DESIGN.md steps 1 to 4): its samples, the eye pass, the photon
 //! pass and the gather.
 
+use rayon::prelude::*;
 use std::time::Instant;
 
 use super::beams::{add_beams, in_media, Beam};
@@ -9,7 +10,10 @@ use super::photon_sampling::visible_points;
 use super::renderer::{collect_counting, PassSamples, PassStats, PixelEstimate, Renderer};
 use super::visible::{continue_eye_path, start_eye_path, trace_eye_path, EyeEvent, EyeResult};
 
-impl Renderer<'_> {
+/// Pixels an eye pass with beams traces as one task.
+const BEAM_CHUNK: usize = 256;
+
+impl<'a> Renderer<'a> {
     /// Renders pass `index`: one estimate per pixel, in row-major order.
     pub fn run_pass(&self, index: u64) -> (PassSamples, Vec<PixelEstimate>, PassStats) {
         let pass = self.pass_samples(index);
@@ -43,31 +47,46 @@ impl Renderer<'_> {
         let grid_ns = lap();
         let mut estimates = gather(&points, &set);
         if let Some(media) = &media {
-            add_beams(&mut estimates, &beams, media);
+            add_beams(&mut estimates, &beams, media, &pass.wavelengths);
         }
         let stages = PassStats { stage_ns: [eye_ns, photon_ns, grid_ns, lap()], ..PassStats::default() };
         (pass, estimates, eye_stats + photon_stats + stages)
     }
 
-    /// Every pixel's eye path, and its segments through media that scatter as beams.
+    /// Every pixel's eye path, and its segments through media that scatter as beams, in pixel
+    /// order. Pixels are traced in chunks, each gathering its beams into one list (a list per
+    /// pixel cost an allocation a pixel a pass).
     #[inline(never)]
     fn trace_visible_points_and_beams(
         &self,
         pass: &PassSamples,
-    ) -> (Vec<EyeResult>, Vec<Vec<Beam>>, PassStats) {
+    ) -> (Vec<EyeResult>, Vec<Beam<'a>>, PassStats) {
         let pixels = (self.settings.width * self.settings.height) as usize;
-        let (paths, stats) = collect_counting(pixels, |pixel| {
-            let (state, start_stats) = start_eye_path(self, pass, pixel);
-            let mut beams = Vec::new();
-            let (end, stats) = continue_eye_path(self, pass, state, |event| {
-                if let EyeEvent::Segment(state, length) = event {
-                    beams.extend(Beam::along(self.scene, &pass.wavelengths, state, length));
+        let chunks: Vec<(Vec<EyeResult>, Vec<Beam>, PassStats)> = (0..pixels)
+            .into_par_iter()
+            .chunks(BEAM_CHUNK)
+            .map(|chunk| {
+                let (mut points, mut beams, mut stats) = (Vec::new(), Vec::new(), PassStats::default());
+                for pixel in chunk {
+                    let (state, start_stats) = start_eye_path(self, pass, pixel);
+                    let (end, path_stats) = continue_eye_path(self, pass, state, |event| {
+                        if let EyeEvent::Segment(state, length) = event {
+                            beams.extend(Beam::along(self.scene, pixel, state, length));
+                        }
+                    });
+                    points.push(end.result);
+                    stats = stats + start_stats + path_stats;
                 }
-            });
-            ((end.result, beams), start_stats + stats)
-        });
-        let (points, beams) = paths.into_iter().unzip();
-        (points, beams, stats)
+                (points, beams, stats)
+            })
+            .collect();
+        let mut all = (Vec::with_capacity(pixels), Vec::new(), PassStats::default());
+        for (points, beams, stats) in chunks {
+            all.0.extend(points);
+            all.1.extend(beams);
+            all.2 = all.2 + stats;
+        }
+        all
     }
 
     pub(super) fn trace_visible_points(&self, pass: &PassSamples) -> (Vec<EyeResult>, PassStats) {
