@@ -1,6 +1,7 @@
-//! Where a path scatters in a homogeneous medium that scatters: the distance to its next event,
-//! drawn in proportion to the transmittance times the extinction (Beer–Lambert's free flight),
-//! and points on a segment drawn toward a light (equiangular sampling).
+//! Where a photon path scatters in a homogeneous medium that scatters: the distance to its next
+//! event, drawn in proportion to the transmittance times the extinction (Beer–Lambert's free
+//! flight), and points on an eye segment drawn toward a light (equiangular sampling). Eye paths
+//! draw no events: they pass through media as beams (`beams.rs`).
 //!
 //! The extinction depends on the wavelength, and a path carries four. The distance is drawn at
 //! one of them, chosen uniformly, and weighed by the density of the four mixed (Wilkie et al.
@@ -42,7 +43,7 @@ impl Flight {
 
     /// The distance to the next event, from the uniform number `u` (infinite where the lane drawn
     /// at does not scatter or absorb).
-    pub fn draw(&self, u: f32) -> f32 {
+    fn draw(&self, u: f32) -> f32 {
         // One number picks the lane and, rescaled, the distance at it.
         let scaled = u * self.lanes as f32;
         let lane = (scaled as usize).min(self.lanes - 1);
@@ -50,13 +51,13 @@ impl Flight {
     }
 
     /// The weight of an event at `t`: the transmittance to it over the distance's density.
-    pub fn event_weight(&self, t: f32) -> SampledSpectrum {
+    fn event_weight(&self, t: f32) -> SampledSpectrum {
         let kept = transmittance(self.extinction, t);
         over(kept, self.mean(self.extinction * kept))
     }
 
     /// The weight of passing `length` without an event: the transmittance over its probability.
-    pub fn pass_weight(&self, length: f32) -> SampledSpectrum {
+    fn pass_weight(&self, length: f32) -> SampledSpectrum {
         let kept = transmittance(self.extinction, length);
         over(kept, self.mean(kept))
     }
