@@ -227,6 +227,94 @@ fn memory_budgets_take_units() {
     let dir = tempfile::tempdir().unwrap();
     let scene = bundled_scene("furnace.gltf");
     for size in ["512M", "2g", "1GiB", "100000000", "64KB"] {
+        let output = run_caustic(&[
+            "render",
+            scene.to_str().unwrap(),
+            "-o",
+            dir.path().to_str().unwrap(),
+            "--passes",
+            "1",
+            "--resolution",
+            "4x4",
+            "--progress",
+            "none",
+            "--memory-budget",
+            size,
+        ]);
+        assert!(output.status.success(), "{size}: {}", stderr(&output));
+    }
+}
+
+#[test]
+fn an_unwritable_output_folder_is_named() {
+    let dir = tempfile::tempdir().unwrap();
+    let blocker = dir.path().join("file");
+    std::fs::write(&blocker, "not a folder").unwrap();
+    let out = blocker.join("renders");
+    let scene = bundled_scene("furnace.gltf");
+    assert_fails(
+        &[
+            "render",
+            scene.to_str().unwrap(),
+            "-o",
+            out.to_str().unwrap(),
+            "--passes",
+            "1",
+            "--resolution",
+            "4x4",
+            "--progress",
+            "none",
+        ],
+        &["output folder", "renders"],
+    );
+}
+
+/// `caustic compare` measures any renderer's EXR (here R/G/B, as Blender writes) against a
+/// reference: one pixel of 64 off by 100% gives relative MSE 1 / (1 + f^2) / 64 with f 1% of the
+/// reference's mean, and mean relative error 1/64; different sizes are refused, naming both.
+#[test]
+fn compare_prints_the_error_against_a_reference() {
+    let dir = tempfile::tempdir().unwrap();
+    let flat = Image { width: 8, height: 8, rgb: vec![[1.0; 3]; 64] };
+    let mut off = Image { width: 8, height: 8, rgb: vec![[1.0; 3]; 64] };
+    off.rgb[9] = [2.0; 3];
+    let small = Image { width: 4, height: 8, rgb: vec![[1.0; 3]; 32] };
+    for (name, image) in [("flat", &flat), ("off", &off), ("small", &small)] {
+        write_image(&dir.path().join(format!("{name}.exr")), image);
+    }
+    let path = |name: &str| dir.path().join(format!("{name}.exr")).to_str().unwrap().to_owned();
+    let output = run_caustic(&["compare", &path("off"), "--reference", &path("flat")]);
+    assert!(output.status.success(), "{}", stderr(&output));
+    let error: serde_json::Value = serde_json::from_slice(&output.stdout).unwrap();
+    let expected = 1.0 / (1.0 + 1e-4) / 64.0;
+    assert!((error["relative_mse"].as_f64().unwrap() - expected).abs() < 1e-9, "{error}");
+    assert!((error["mean_relative"].as_f64().unwrap() - 1.0 / 64.0).abs() < 1e-9, "{error}");
+    let same = run_caustic(&["compare", &path("flat"), "--reference", &path("flat")]);
+    let error: serde_json::Value = serde_json::from_slice(&same.stdout).unwrap();
+    assert_eq!(error["relative_mse"].as_f64(), Some(0.0), "{error}");
+    let output = run_caustic(&["compare", &path("small"), "--reference", &path("flat")]);
+    assert!(!output.status.success());
+    let message = stderr(&output);
+    assert!(message.contains("small.exr is 4x8") && message.contains("flat.exr is 8x8"), "{message}");
+    let output = run_caustic(&["compare", &path("missing"), "--reference", &path("flat")]);
+    assert!(stderr(&output).contains("cannot read image") && stderr(&output).contains("missing.exr"));
+}
+
+/// Every scene in `scenes/` loads and renders (one pass at 8 x 6, its first frame) with nothing
+/// to warn about: what the project ships, it renders whole.
+#[test]
+fn every_bundled_scene_renders_without_a_warning() {
+    let dir = tempfile::tempdir().unwrap();
+    let scenes = Path::new(env!("CARGO_MANIFEST_DIR")).join("scenes");
+    let mut names: Vec<_> = std::fs::read_dir(&scenes)
+        .unwrap()
+        .map(|entry| entry.unwrap().path())
+        .filter(|path| path.extension().is_some_and(|e| e == "gltf"))
+        .collect();
+    names.sort();
+    assert!(names.len() >= 10, "scenes: {names:?}");
+    for scene in names {
+        let out = dir.path().join(scene.file_stem().unwrap());
         let mut args = vec!["render", scene.to_str().unwrap(), "-o", out.to_str().unwrap()];
         args.extend(["--passes", "1", "--resolution", "8x6", "--photons", "64", "--progress", "none"]);
         let output = run_caustic(&args);
