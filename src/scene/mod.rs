@@ -304,6 +304,11 @@ impl Description {
 
     /// Whether some medium scatters light: a material's inside, or the world's fog.
     pub fn scatters(&self) -> bool {
-        self.materials.iter().filter_map(|m| m.volume.as_ref()).chain(&self.fog).any(Volume::scatters)
+        media_scatter(&self.materials, &self.fog)
     }
+}
+
+/// Whether some medium of `materials` or the fog `fog` scatters light.
+pub fn media_scatter(materials: &[Material], fog: &Option<Volume>) -> bool {
+    materials.iter().filter_map(|m| m.volume.as_ref()).chain(fog).any(Volume::scatters)
 }

@@ -6,9 +6,9 @@ use std::sync::{Arc, Mutex, PoisonError};
 
 use crate::accel::Accel;
 use crate::lights::LightTree;
-use crate::materials::{Bsdf, ShadingFrame, Volume};
+use crate::materials::{Bsdf, ShadingFrame};
 use crate::sampling::{pass_sample, Distribution1D};
-use crate::scene::Scene;
+use crate::scene::{media_scatter, Scene};
 use crate::spectrum::{SampledSpectrum, Wavelengths};
 
 use super::media::{media_at, Media};
@@ -337,12 +337,7 @@ impl<'a> Renderer<'a> {
             settings,
             has_cut_away_surfaces: scene.materials.iter().any(|m| m.alpha.cuts()),
             has_volumes: scene.materials.iter().any(|m| m.volume.is_some()) || scene.fog.is_some(),
-            has_scattering: scene
-                .materials
-                .iter()
-                .filter_map(|m| m.volume.as_ref())
-                .chain(&scene.fog)
-                .any(Volume::scatters),
+            has_scattering: media_scatter(&scene.materials, &scene.fog),
             start_media: StartMedia::default(),
         };
         renderer.start_media = StartMedia::of(&renderer);
