@@ -19,6 +19,7 @@ use std::path::Path;
 
 use exr::prelude::*;
 use glam::DVec3;
+use rayon::prelude::*;
 
 use crate::spectrum::{
     cmf, d65, d65_xyz, linear_rec709_to_xyz, xyz_to_linear_rec709, SampledSpectrum, Wavelengths,
@@ -235,39 +236,97 @@ impl Film {
     }
 
     /// Adds one pass of gather radius `radius`: each pixel's radiance, Laplacian term (at the
-    /// wavelengths `lambda`, each lane sampled with its density) and coverage.
+    /// wavelengths `lambda`, each lane sampled with its density) and coverage, pixel `i`'s from
+    /// `estimate_of(i)`.
     pub fn add_pass(
         &mut self,
         lambda: &Wavelengths,
         radius: f32,
-        estimates: impl Iterator<Item = (SampledSpectrum, SampledSpectrum, f32)>,
+        estimate_of: impl Fn(usize) -> Estimate + Sync,
     ) {
         let weights = self.pass_weights(lambda, radius);
         self.white_y += weights.white_y;
         self.white_y_squared += weights.white_y * weights.white_y;
         self.white_xyz += weights.white_xyz;
         self.passes += 1;
-        for (i, estimate) in estimates.enumerate().take(self.pixels.len()) {
-            self.add_estimate(&weights, i, estimate, 1.0);
-            self.pixels[i].passes += 1;
-        }
+        self.for_each_entry(
+            self.pixels.len(),
+            |i| i,
+            |i, sums, bins| {
+                sums.passes += 1;
+                add_estimate(&weights, sums, bins, estimate_of(i), 1.0)
+            },
+        );
     }
 
     /// Adds, at some pixels, the difference between a frame's estimate and the common one that a
     /// film of common estimates (shared by the frames of a block) received for the same pass:
     /// this film then holds one frame's differences, and adding it to the common film gives the
-    /// frame's own sums (exactly, up to rounding). Pass counts are the common film's.
+    /// frame's own sums (exactly, up to rounding). Pass counts are the common film's. Difference
+    /// `k` of `count` is `difference(k)`: the pixel (increasing with `k`), the frame's estimate
+    /// and the common one.
     pub fn add_differences(
         &mut self,
         lambda: &Wavelengths,
         radius: f32,
-        differences: impl Iterator<Item = (usize, Estimate, Estimate)>,
+        count: usize,
+        difference: impl Fn(usize) -> (usize, Estimate, Estimate) + Sync,
     ) {
         let weights = self.pass_weights(lambda, radius);
-        for (i, own, common) in differences {
-            self.add_estimate(&weights, i, own, 1.0);
-            self.add_estimate(&weights, i, common, -1.0);
-        }
+        self.for_each_entry(
+            count,
+            |k| difference(k).0,
+            |k, sums, bins| {
+                let (_, own, common) = difference(k);
+                add_estimate(&weights, sums, bins, own, 1.0)
+                    + add_estimate(&weights, sums, bins, common, -1.0)
+            },
+        );
+    }
+
+    /// Calls `add(k, sums, bands)` with the sums and spectral bands of pixel `pixel_of(k)`, for
+    /// each `k` below `count` (pixels increasing with `k`), on blocks of pixels in parallel (each
+    /// pixel's sums see the same additions in the same order with any number of threads). `add`
+    /// gives the non-finite estimates it met, counted here.
+    fn for_each_entry(
+        &mut self,
+        count: usize,
+        pixel_of: impl Fn(usize) -> usize + Sync,
+        add: impl Fn(usize, &mut PixelSums, &mut [f64]) -> i64 + Sync,
+    ) {
+        const BLOCK: usize = 4096;
+        let bands = self.bins.count;
+        let first_at = |pixel: usize| {
+            let (mut lo, mut hi) = (0, count);
+            while lo < hi {
+                let mid = (lo + hi) / 2;
+                if pixel_of(mid) < pixel {
+                    lo = mid + 1;
+                } else {
+                    hi = mid;
+                }
+            }
+            lo
+        };
+        let mut band_blocks: Vec<&mut [f64]> = self.bins.sums.chunks_mut((BLOCK * bands).max(1)).collect();
+        band_blocks.resize_with(self.pixels.len().div_ceil(BLOCK), Default::default);
+        let non_finite: i64 = self
+            .pixels
+            .par_chunks_mut(BLOCK)
+            .zip(band_blocks)
+            .enumerate()
+            .map(|(b, (pixels, block_bands))| {
+                let start = b * BLOCK;
+                let mut non_finite = 0;
+                for k in first_at(start)..first_at(start + pixels.len()) {
+                    let i = pixel_of(k) - start;
+                    let pixel_bands = block_bands.get_mut(i * bands..(i + 1) * bands).unwrap_or_default();
+                    non_finite += add(k, &mut pixels[i], pixel_bands);
+                }
+                non_finite
+            })
+            .sum();
+        self.non_finite_estimates = self.non_finite_estimates.wrapping_add(non_finite as u64);
     }
 
     /// What every pixel's estimate of one pass is weighed by.
@@ -288,42 +347,6 @@ impl Film {
                 .pdf
                 .to_array()
                 .map(|p| 1.0 / (f64::from(p) * self.bins.width_nm() * LANES as f64)),
-        }
-    }
-
-    /// Adds `sign` (1 or -1) times pixel `i`'s estimate to its sums (not its pass count).
-    fn add_estimate(
-        &mut self,
-        w: &PassWeights,
-        i: usize,
-        (radiance, laplacian, coverage): Estimate,
-        sign: f64,
-    ) {
-        // A non-finite estimate would poison the pixel's sums for good: count it as zero and
-        // report it, so the image stays usable and the problem is not silent. (A film of
-        // differences takes back the common film's count: the sum wraps back.)
-        let (radiance, laplacian) = if radiance.is_finite() && laplacian.is_finite() {
-            (radiance, laplacian)
-        } else {
-            self.non_finite_estimates = if sign > 0.0 {
-                self.non_finite_estimates.wrapping_add(1)
-            } else {
-                self.non_finite_estimates.wrapping_sub(1)
-            };
-            (SampledSpectrum::ZERO, SampledSpectrum::ZERO)
-        };
-        let xyz = lanes_xyz(&w.lanes, radiance) * sign;
-        let sums = &mut self.pixels[i];
-        sums.xyz += xyz;
-        sums.y_squared += sign * (xyz.y * xyz.y);
-        sums.y_white += xyz.y * w.white_y;
-        sums.laplacian_y += w.radius2 * lanes_xyz(&w.lanes, laplacian).y * sign;
-        sums.coverage += f64::from(coverage) * sign;
-        if let Some(bands) = w.bands {
-            let pixel_bins = &mut self.bins.sums[i * self.bins.count..][..self.bins.count];
-            for k in 0..LANES {
-                pixel_bins[bands[k]] += f64::from(radiance[k]) * w.band_weights[k] * sign;
-            }
         }
     }
 
@@ -458,6 +481,37 @@ impl Film {
     }
 }
 
+/// Adds `sign` (1 or -1) times a pixel's estimate to its sums (not its pass count) and spectral
+/// bands; gives `sign` where the estimate was not finite (then counted as zero), else 0.
+fn add_estimate(
+    w: &PassWeights,
+    sums: &mut PixelSums,
+    bands: &mut [f64],
+    (radiance, laplacian, coverage): Estimate,
+    sign: f64,
+) -> i64 {
+    // A non-finite estimate would poison the pixel's sums for good: count it as zero and report
+    // it, so the image stays usable and the problem is not silent. (A film of differences takes
+    // back the common film's count: the sum wraps back.)
+    let (radiance, laplacian, non_finite) = if radiance.is_finite() && laplacian.is_finite() {
+        (radiance, laplacian, 0)
+    } else {
+        (SampledSpectrum::ZERO, SampledSpectrum::ZERO, sign as i64)
+    };
+    let xyz = lanes_xyz(&w.lanes, radiance) * sign;
+    sums.xyz += xyz;
+    sums.y_squared += sign * (xyz.y * xyz.y);
+    sums.y_white += xyz.y * w.white_y;
+    sums.laplacian_y += w.radius2 * lanes_xyz(&w.lanes, laplacian).y * sign;
+    sums.coverage += f64::from(coverage) * sign;
+    if let Some(lane_bands) = w.bands {
+        for k in 0..LANES {
+            bands[lane_bands[k]] += f64::from(radiance[k]) * w.band_weights[k] * sign;
+        }
+    }
+    non_finite
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -473,7 +527,7 @@ mod tests {
                 SampledSpectrum::ZERO,
                 1.0,
             );
-            film.add_pass(&lambda, 0.1, [pixel, pixel].into_iter());
+            film.add_pass(&lambda, 0.1, |_| pixel);
         }
         film
     }
@@ -491,11 +545,7 @@ mod tests {
         for lambda in [450.0, 550.0, 650.0] {
             let mut film = Film::new(1, 1, FilmMode::Monochromatic { lambda_nm: lambda }, 0, false);
             let white = SampledSpectrum::splat(0.5 * d65(lambda));
-            film.add_pass(
-                &Wavelengths::single(lambda, 1.0),
-                0.1,
-                [(white, SampledSpectrum::ZERO, 1.0)].into_iter(),
-            );
+            film.add_pass(&Wavelengths::single(lambda, 1.0), 0.1, |_| (white, SampledSpectrum::ZERO, 1.0));
             let rgb = film.rgb()[0];
             let luminance = 0.2126 * rgb.x + 0.7152 * rgb.y + 0.0722 * rgb.z;
             assert!((luminance - 0.5).abs() < 1e-3 && rgb.min_element() >= -1e-9, "{lambda}: {rgb}");
@@ -514,11 +564,7 @@ mod tests {
         let mut film = Film::new(1, 1, FilmMode::Spectral, 47, false);
         for i in 0..10_000 {
             let lambda = Wavelengths::sampled(pass_sample(9, i));
-            film.add_pass(
-                &lambda,
-                0.1,
-                [(SampledSpectrum::splat(2.0), SampledSpectrum::ZERO, 1.0)].into_iter(),
-            );
+            film.add_pass(&lambda, 0.1, |_| (SampledSpectrum::splat(2.0), SampledSpectrum::ZERO, 1.0));
         }
         let bands: Vec<f64> = film.bins.sums.iter().map(|s| s / film.passes as f64).collect();
         // A flat spectrum of 2 per nm: every 10 nm band averages 2.

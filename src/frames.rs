@@ -13,7 +13,7 @@ use std::time::{Duration, Instant};
 
 use crate::accel::{Accel, BuildFor, Bvh, InstancedBvh};
 use crate::error::{summarize, ErrorSummary, PixelError};
-use crate::film::{Film, FilmMode, GUIDE_SUMS};
+use crate::film::{Estimate, Film, FilmMode, GUIDE_SUMS};
 use crate::monitor::{ErrorSettings, Monitor, StopReason};
 use crate::partial;
 use crate::progress::Progress;
@@ -806,10 +806,11 @@ fn shared_pass(
                     let new = || Film::new(film.width, film.height, film.mode, film.bins.count, false);
                     add_estimates(common.get_or_insert_with(new), samples, estimates);
                 }
-                let sums = |e: &PixelEstimate| (e.radiance, e.laplacian, e.coverage);
-                let differences =
-                    differing.iter().map(|(p, e)| (*p as usize, sums(e), sums(&estimates[*p as usize])));
-                frame.film.add_differences(&samples.wavelengths, samples.radius, differences);
+                let difference = |k: usize| {
+                    let (pixel, own) = &differing[k];
+                    (*pixel as usize, sums(own), sums(&estimates[*pixel as usize]))
+                };
+                frame.film.add_differences(&samples.wavelengths, samples.radius, differing.len(), difference);
             }
         }
         frame.stats = frame.stats + out.stats;
@@ -842,8 +843,12 @@ fn add_pass(
 
 /// Adds one pass's pixel estimates to a film.
 pub fn add_estimates(film: &mut Film, samples: &PassSamples, estimates: &[PixelEstimate]) {
-    let sums = estimates.iter().map(|e| (e.radiance, e.laplacian, e.coverage));
-    film.add_pass(&samples.wavelengths, samples.radius, sums);
+    film.add_pass(&samples.wavelengths, samples.radius, |i| sums(&estimates[i]));
+}
+
+/// What the film adds of a pixel estimate.
+fn sums(e: &PixelEstimate) -> Estimate {
+    (e.radiance, e.laplacian, e.coverage)
 }
 
 /// Writes a frame's EXR with its error passes (the bound and the variance of the mean).
