@@ -891,27 +891,29 @@ fn finish_frames(
 ) -> Result<(), String> {
     while !stopped.is_empty() {
         let rest = stopped.split_off(stopped.len().min(rayon::current_num_threads()));
-        let mut finished = Vec::with_capacity(stopped.len());
-        for (mut frame, stopped_by) in std::mem::replace(&mut stopped, rest) {
-            let mut film = std::mem::replace(&mut frame.film, Film::new(0, 0, FilmMode::Spectral, 0, false));
-            if let Some(common) = common {
-                film.add(common);
-            }
-            let errors = frame.monitor.finish(&film, frame.elapsed_s, photons, stopped_by)?;
+        let group = std::mem::replace(&mut stopped, rest);
+        let finished: Vec<_> = group
+            .into_par_iter()
+            .map(|(mut frame, stopped_by)| {
+                let mut film =
+                    std::mem::replace(&mut frame.film, Film::new(0, 0, FilmMode::Spectral, 0, false));
+                if let Some(common) = common {
+                    film.add(common);
+                }
+                let errors = frame.monitor.final_errors(&film);
+                let written = write_output(shot, settings, frame.frame, &film, &errors);
+                (frame, stopped_by, film, errors, written)
+            })
+            .collect();
+        for (mut frame, stopped_by, film, errors, written) in finished {
+            frame.monitor.finish(&film, &errors, frame.elapsed_s, photons, stopped_by)?;
             if film.non_finite_estimates > 0 {
                 eprintln!(
                     "caustic: warning: frame {}: {} pixel estimates were NaN or infinite and counted as zero (please report this scene)",
                     frame.frame, film.non_finite_estimates
                 );
             }
-            finished.push((frame, stopped_by, film, errors));
-        }
-        let written: Vec<Result<PathBuf, String>> = finished
-            .par_iter()
-            .map(|(frame, _, film, errors)| write_output(shot, settings, frame.frame, film, errors))
-            .collect();
-        for ((frame, stopped_by, film, errors), path) in finished.into_iter().zip(written) {
-            announce(settings, frame, stopped_by, &film, &errors, path?, report);
+            announce(settings, frame, stopped_by, &film, &errors, written?, report);
         }
     }
     Ok(())

@@ -264,19 +264,25 @@ impl Monitor {
         Ok(target.is_some_and(|(t, _)| film.passes >= MIN_PASSES_TO_STOP && error <= t))
     }
 
-    /// Called when the frame ends: the last log line, with what stopped it; gives the errors.
+    /// The error estimates of every pixel of the frame's finished film.
+    pub fn final_errors(&self, film: &Film) -> Vec<PixelError> {
+        pixel_errors(film, self.settings.confidence)
+    }
+
+    /// Called when the frame ends, with its [`Monitor::final_errors`]: the last log line, with
+    /// what stopped it.
     pub fn finish(
         &mut self,
         film: &Film,
+        errors: &[PixelError],
         elapsed_s: f64,
         photons: u64,
         stop: StopReason,
-    ) -> Result<Vec<PixelError>, String> {
-        let errors = pixel_errors(film, self.settings.confidence);
-        if self.log.is_some() {
-            self.write_line(film, &errors, summarize(&errors), elapsed_s, photons, Some(stop))?;
+    ) -> Result<(), String> {
+        if self.log.is_none() {
+            return Ok(());
         }
-        Ok(errors)
+        self.write_line(film, errors, summarize(errors), elapsed_s, photons, Some(stop))
     }
 
     fn write_line(
