@@ -572,6 +572,37 @@ mod tests {
         assert_eq!(film.bins.channel_name(0), "Spectral.365nm");
     }
 
+    /// Passes and differences, added on blocks of pixels in parallel, land on the pixels they
+    /// name across block boundaries, spectral bands included: the same sums, bit for bit, as
+    /// adding them pixel by pixel.
+    #[test]
+    fn passes_and_differences_land_on_their_pixels_across_blocks() {
+        let (pixels, bands) = (10_000, 3);
+        let mut film = Film::new(5000, 2, FilmMode::Spectral, bands, false);
+        let lambda = Wavelengths::sampled(pass_sample(3, 0));
+        let estimate =
+            |i: usize| (SampledSpectrum::splat(i as f32), SampledSpectrum::splat(0.5), (i % 2) as f32);
+        let own = |i: usize| (SampledSpectrum::splat(2.0 * i as f32), SampledSpectrum::ZERO, 1.0);
+        film.add_pass(&lambda, 0.1, estimate);
+        let changed: Vec<usize> = (0..pixels).filter(|i| i % 977 == 3 || (4095..=4096).contains(i)).collect();
+        film.add_differences(&lambda, 0.1, changed.len(), |k| {
+            (changed[k], own(changed[k]), estimate(changed[k]))
+        });
+        let weights = film.pass_weights(&lambda, 0.1);
+        for i in 0..pixels {
+            let (mut sums, mut pixel_bands) =
+                (PixelSums { passes: 1, ..PixelSums::default() }, vec![0.0; bands]);
+            add_estimate(&weights, &mut sums, &mut pixel_bands, estimate(i), 1.0);
+            if changed.contains(&i) {
+                add_estimate(&weights, &mut sums, &mut pixel_bands, own(i), 1.0);
+                add_estimate(&weights, &mut sums, &mut pixel_bands, estimate(i), -1.0);
+            }
+            assert_eq!(film.pixels[i], sums, "pixel {i}");
+            assert_eq!(film.bins.sums[i * bands..(i + 1) * bands], pixel_bands[..], "pixel {i}'s bands");
+        }
+        assert!(changed.len() > 10 && film.bins.sums.iter().any(|&b| b != 0.0));
+    }
+
     #[test]
     fn non_finite_estimates_are_counted_and_do_not_poison_the_pixel() {
         let film = film_of(16, |l| if l < 550.0 { f32::NAN } else { d65(l) });
