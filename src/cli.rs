@@ -5,7 +5,7 @@ use std::path::{Path, PathBuf};
 use clap::{Args, Parser, Subcommand};
 
 use crate::error::Statistic;
-use crate::frames::{self, LightSampling, PhotonSampling, ProgressStyle, RenderSettings};
+use crate::frames::{self, LightSampling, Method, PhotonSampling, ProgressStyle, RenderSettings};
 use crate::monitor::ErrorSettings;
 
 /// The bundled demo scene, used when no scene is given.
@@ -146,6 +146,12 @@ pub struct RenderArgs {
     /// demo box, at 40%, renders faster uniformly), else chooses per pass by its own pilot.
     #[arg(long, value_enum, default_value_t = PhotonSampling::Uniform)]
     photon_sampling: PhotonSampling,
+    /// How a pass combines camera and light paths: stochastic progressive photon mapping, or
+    /// vertex connection and merging (photon merging at every camera vertex, combined with path
+    /// tracing, light tracing and connections by multiple importance sampling; not yet for media
+    /// or lights with a radius).
+    #[arg(long, value_enum, default_value_t = Method::Sppm)]
+    method: Method,
     /// Also write Cycles' Denoising Albedo and Denoising Normal passes (for Blender's Denoise
     /// node, Open Image Denoise).
     #[arg(long)]
@@ -357,6 +363,7 @@ impl RenderArgs {
             wavelength_nm: self.wavelength,
             light_sampling: self.light_sampling,
             photon_sampling: self.photon_sampling,
+            method: self.method,
             spectral_bins: self.spectral_bins,
             denoising_passes: self.denoising_passes,
             frames: self.frames.0.clone(),

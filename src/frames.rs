@@ -22,12 +22,12 @@ use crate::sampling::pass_time_sample;
 use crate::scene::description::{Lens, LensSettings, Shutter};
 use crate::scene::pose::{lens, Motion};
 use crate::scene::{Description, Prepared, Scene, TimeRange, DEFAULT_RADIUS_FRACTION};
-pub use crate::sppm::{LightSampling, PhotonSampling};
+pub use crate::sppm::{LightSampling, Method, PhotonSampling};
 use rayon::prelude::*;
 
 use crate::sppm::{
-    run_shared_pass, Crop, FrameEstimates, PassSamples, PassStats, PixelEstimate, Renderer, SppmSettings,
-    ViewMeasure,
+    run_shared_pass, vcm_unsupported, Crop, FrameEstimates, PassSamples, PassStats, PixelEstimate, Renderer,
+    SppmSettings, ViewMeasure,
 };
 
 /// Set when the user asks the render to stop (Ctrl-C, SIGTERM): the pass in flight finishes,
@@ -87,6 +87,8 @@ pub struct RenderSettings {
     pub light_sampling: LightSampling,
     /// How photon paths draw their primary samples.
     pub photon_sampling: PhotonSampling,
+    /// How a pass combines camera and light paths.
+    pub method: Method,
     /// Spectral bands written beside Combined (0 for none).
     pub spectral_bins: usize,
     /// Write Cycles' Denoising Albedo and Denoising Normal passes.
@@ -128,6 +130,7 @@ impl RenderSettings {
             wavelength_nm: None,
             light_sampling: LightSampling::Tree,
             photon_sampling: PhotonSampling::Uniform,
+            method: Method::Sppm,
             spectral_bins: 0,
             denoising_passes: false,
             shutter_frames: None,
@@ -341,6 +344,7 @@ fn fingerprint(
         "wavelength_nm": sppm.fixed_wavelength_nm,
         "light_sampling": format!("{:?}", sppm.light_sampling),
         "photon_sampling": format!("{:?}", sppm.photon_sampling),
+        "method": format!("{:?}", sppm.method),
         "spectral_bins": settings.spectral_bins,
         "denoising_passes": settings.denoising_passes,
         "shutter": [shutter.open, shutter.length],
@@ -398,7 +402,15 @@ impl Shot {
             fixed_wavelength_nm: settings.wavelength_nm,
             light_sampling: settings.light_sampling,
             photon_sampling,
+            method: settings.method,
         };
+        if settings.method == Method::Vcm {
+            if let Some(what) = vcm_unsupported(&first) {
+                return Err(format!(
+                    "--method vcm does not render {what} yet; render this scene with --method sppm"
+                ));
+            }
+        }
         let still_accel =
             || Accel::new(Arc::clone(&fixed_bvh), Bvh::empty()).with_instances(instanced_bvh.clone());
         let still = (!prepared.has_motion()).then(|| (first, still_accel()));
@@ -582,10 +594,12 @@ pub fn motion_spans(description: &Description, frames: &[i32], shutter: Shutter)
 
 impl Shot {
     /// Whether a block of `frames` frames shares paths: reuse is on, there is more than one
-    /// frame, there are static triangles to share, and no medium scatters (paths that end in
-    /// media, and the direct light along their segments, are not shared).
+    /// frame, there are static triangles to share, no medium scatters (paths that end in
+    /// media, and the direct light along their segments, are not shared), and the passes are
+    /// SPPM's (VCM's paths are not shared yet).
     fn shares(&self, settings: &RenderSettings, frames: usize) -> bool {
         settings.reuse
+            && settings.method == Method::Sppm
             && frames > 1
             && self.prepared.triangle_counts().0 > 0
             && !self.prepared.description.scatters()

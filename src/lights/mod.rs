@@ -228,6 +228,26 @@ pub struct EmittedPhoton {
     pub flux: SampledSpectrum,
 }
 
+/// How densely a light emits along one ray, for weighing photon paths against the other ways
+/// of sampling the same path (vertex connection and merging, `sppm/vcm/`). Light choice is not
+/// included.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct EmissionDensity {
+    /// The density of a photon's origin and direction: per area and per solid angle (a distant
+    /// light's: per area of the disc its photons start on and per solid angle; a point's: per
+    /// solid angle).
+    pub emission: f32,
+    /// The density with which next-event estimation picks the ray's point on the light: per area
+    /// (a distant light's direction: per solid angle); 1 for a delta light.
+    pub direct: f32,
+    /// The cosine between the ray and the light's normal (1 for points and distant lights).
+    pub cos: f32,
+    /// No path can meet the light: a point, or a sun without a disc.
+    pub delta: bool,
+    /// The light lies at a finite distance (not a sun or the world).
+    pub finite: bool,
+}
+
 /// A point on the disc of `sphere` facing `direction`, upstream of the scene.
 fn disc_origin(sphere: &BoundingSphere, direction: Vec3, u: Vec2) -> Vec3 {
     let (t, b) = basis(direction);
@@ -404,6 +424,66 @@ impl Light {
             }
         };
         (photon.flux.max_element() > 0.0 && photon.flux.is_finite()).then_some(photon)
+    }
+}
+
+impl Light {
+    /// How densely [`Light::emit_photon`] emits a photon along the unit `direction` of travel
+    /// from a point of the light, and [`Light::sample_incident`] picks that point (each light's
+    /// points are uniform over it); `None` for a point or spot light with a radius
+    /// (its Soft Falloff disc faces each receiver, so no one density describes it) or where it
+    /// emits nothing that way.
+    pub fn emission_density(&self, direction: Vec3) -> Option<EmissionDensity> {
+        let density = match self {
+            Light::Sphere(sphere) if sphere.radius > 0.0 => return None,
+            Light::Sphere(sphere) => EmissionDensity {
+                emission: 1.0 / sphere.beam.map_or(4.0 * PI, |b| b.outer.solid_angle()),
+                direct: 1.0,
+                cos: 1.0,
+                delta: true,
+                finite: true,
+            },
+            Light::Sun { direction: axis, disc, sphere, .. } => {
+                let disc_area = PI * sphere.radius * sphere.radius;
+                let (direct, delta) = match disc.is_delta() {
+                    true => (1.0, true),
+                    false if disc.contains(*axis, direction) => (1.0 / disc.solid_angle(), false),
+                    false => return None,
+                };
+                EmissionDensity { emission: direct / disc_area, direct, cos: 1.0, delta, finite: false }
+            }
+            Light::Triangle(triangle) => {
+                let cos = triangle.normal.dot(direction);
+                let cos = if triangle.both_sides { cos.abs() } else { cos };
+                let per_direction = match triangle.spread {
+                    Some(spread) if cos < spread.cos_half() => 0.0,
+                    Some(spread) => cos / (PI * (1.0 - spread.cos_half() * spread.cos_half())),
+                    None => cos / PI,
+                };
+                if !(cos > 0.0 && per_direction > 0.0 && triangle.area > 0.0) {
+                    return None;
+                }
+                EmissionDensity {
+                    emission: per_direction / (triangle.sides() * triangle.area),
+                    direct: 1.0 / triangle.area,
+                    cos,
+                    delta: false,
+                    finite: true,
+                }
+            }
+            Light::World(world) => {
+                let direct = world.pdf(-direction);
+                let disc_area = PI * world.sphere.radius * world.sphere.radius;
+                EmissionDensity {
+                    emission: direct / disc_area,
+                    direct,
+                    cos: 1.0,
+                    delta: false,
+                    finite: false,
+                }
+            }
+        };
+        (density.emission > 0.0 && density.emission.is_finite()).then_some(density)
     }
 }
 

@@ -36,14 +36,17 @@ const EDGE_COSINE: f32 = 0.5;
 
 /// The biweight kernel of one radius and its Laplacian.
 #[derive(Clone, Copy)]
-struct Kernel {
-    r2: f32,
-    scale: f32,
-    laplacian_scale: f32,
+pub(super) struct Kernel {
+    /// The radius, squared.
+    pub(super) r2: f32,
+    /// The kernel's factor: `K(t) = scale (1 - t^2)^2`.
+    pub(super) scale: f32,
+    /// Its Laplacian's factor: `laplacian_scale (1 - 2 t^2)`.
+    pub(super) laplacian_scale: f32,
 }
 
 impl Kernel {
-    fn new(radius: f32) -> Self {
+    pub(super) fn new(radius: f32) -> Self {
         let r2 = radius * radius;
         let scale = 3.0 / (PI * r2);
         Kernel { r2, scale, laplacian_scale: -8.0 * scale / r2 }

@@ -21,6 +21,7 @@ pub mod radius;
 mod renderer;
 mod see_through;
 mod shared;
+mod vcm;
 mod visible;
 
 pub use footprint::ViewMeasure;
@@ -28,7 +29,8 @@ pub use guides::Guide;
 pub use photon_sampling::AUTO_VISIBLE_BELOW;
 pub use photons::Photon;
 pub use renderer::{
-    Crop, LightSampling, PassSamples, PassStats, PhotonSampling, PixelEstimate, Renderer, SppmSettings,
-    VisiblePoint, MAX_DEPTH,
+    Crop, LightSampling, Method, PassSamples, PassStats, PhotonSampling, PixelEstimate, Renderer,
+    SppmSettings, VisiblePoint, MAX_DEPTH,
 };
 pub use shared::{run_shared_pass, FrameEstimates, SharedPassOutput};
+pub use vcm::unsupported as vcm_unsupported;

@@ -7,7 +7,7 @@ use std::time::Instant;
 use super::beams::{add_beams, in_media, Beam};
 use super::gather::{gather, PhotonSet};
 use super::photon_sampling::visible_points;
-use super::renderer::{collect_counting, PassSamples, PassStats, PixelEstimate, Renderer};
+use super::renderer::{collect_counting, Method, PassSamples, PassStats, PixelEstimate, Renderer};
 use super::visible::{continue_eye_path, start_eye_path, trace_eye_path, EyeEvent, EyeResult};
 
 /// Pixels an eye pass with beams traces as one task.
@@ -17,6 +17,10 @@ impl<'a> Renderer<'a> {
     /// Renders pass `index`: one estimate per pixel, in row-major order.
     pub fn run_pass(&self, index: u64) -> (PassSamples, Vec<PixelEstimate>, PassStats) {
         let pass = self.pass_samples(index);
+        if self.settings.method == Method::Vcm {
+            let (estimates, stats) = self.run_vcm_pass(&pass);
+            return (pass, estimates, stats);
+        }
         let mut clock = Instant::now();
         let mut lap = || {
             let ns = clock.elapsed().as_nanos() as u64;

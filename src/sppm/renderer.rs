@@ -117,6 +117,20 @@ pub struct SppmSettings {
     pub light_sampling: LightSampling,
     /// How photon paths draw their primary samples.
     pub photon_sampling: PhotonSampling,
+    /// How a pass combines camera and light paths.
+    pub method: Method,
+}
+
+/// How a pass combines camera paths and light paths into its estimate.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, clap::ValueEnum)]
+pub enum Method {
+    /// Stochastic progressive photon mapping: photons gathered at each pixel's first vertex that
+    /// is not a delta or glossy lobe.
+    #[default]
+    Sppm,
+    /// Vertex connection and merging: photon merging at every camera vertex, combined with
+    /// connections, light tracing and path tracing by multiple importance sampling.
+    Vcm,
 }
 
 /// How next-event estimation chooses a light (photons always leave lights in proportion to their

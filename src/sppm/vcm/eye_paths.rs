@@ -1,0 +1,205 @@
+//! Camera subpaths: a camera ray per pixel followed through every bounce (Russian roulette after
+//! the third), and at each vertex whose BSDF is not a delta the estimators that meet light
+//! subpaths there: next-event estimation, connections to the pixel's light path, and merging
+//! with the pass's light vertices. Emission the path meets is weighted against them.
+
+use glam::Vec3;
+
+use super::connect::{connect, direct_light};
+use super::light_paths::LightVertex;
+use super::merge::{CameraVertex, MergeSet};
+use super::mis::{emitter_met, Partials, PassWeights, Scatter};
+use super::view::View;
+use crate::geometry::offset_origin;
+use crate::materials::{Bsdf, Transport};
+use crate::scene::NOT_A_LIGHT;
+use crate::spectrum::{hero_only, SampledSpectrum, LANES};
+use crate::sppm::renderer::{PassSamples, PassStats, PixelEstimate, Renderer, MAX_DEPTH};
+use crate::sppm::visible::start_eye_path;
+
+/// Bounces before Russian roulette may end a camera path.
+const ROULETTE_AFTER: u32 = 3;
+
+/// What a pass's camera paths meet light subpaths with.
+pub struct Lights<'a> {
+    /// Every light path's vertices, path after path.
+    pub vertices: &'a [LightVertex],
+    /// Where each light path's vertices start in `vertices` (and one past the last).
+    pub starts: &'a [usize],
+    /// The light vertices for merging.
+    pub merge_set: &'a MergeSet,
+}
+
+impl Lights<'_> {
+    /// The light path paired with film pixel `pixel`.
+    fn path_of(&self, pixel: usize) -> &[LightVertex] {
+        let paths = self.starts.len() - 1;
+        let k = pixel % paths.max(1);
+        match paths {
+            0 => &[],
+            _ => &self.vertices[self.starts[k]..self.starts[k + 1]],
+        }
+    }
+}
+
+/// The vertex a camera path scattered at last, for the density with which next-event estimation
+/// there would have picked a light the path meets.
+#[derive(Clone, Copy)]
+struct Previous {
+    p: Vec3,
+    n: Vec3,
+}
+
+/// Traces pixel `pixel`'s camera path for `pass`.
+pub fn trace_camera_path(
+    renderer: &Renderer,
+    pass: &PassSamples,
+    (weights, view): (&PassWeights, &View),
+    lights: &Lights,
+    pixel: usize,
+) -> (PixelEstimate, PassStats) {
+    let scene = renderer.scene;
+    let lambda = &pass.wavelengths;
+    let (mut state, mut stats) = start_eye_path(renderer, pass, pixel);
+    let mut partials =
+        Partials::leaving_camera(weights, view.pdf(state.direction.into()), view.traces_lights());
+    let (mut radiance, mut laplacian, mut coverage) = (SampledSpectrum::ZERO, SampledSpectrum::ZERO, 1.0);
+    let mut previous: Option<Previous> = None;
+    let (mut travelled, mut segments) = (0.0f32, 0u32);
+    while state.depth < MAX_DEPTH {
+        stats.eye_rays += 1;
+        let direction = Vec3::from(state.direction);
+        let Some(hit) = renderer.accel.intersect(state.origin.into(), direction, f32::INFINITY) else {
+            if state.camera_ray && scene.transparent_film {
+                coverage = 0.0;
+            } else {
+                radiance += state.beta * escaped(renderer, pass, &partials, previous, direction);
+            }
+            break;
+        };
+        travelled += hit.t;
+        let surface = scene.surface(&hit, lambda);
+        let material = &scene.materials[surface.material as usize];
+        let wo = -direction;
+        let arrived = partials.arrived(Some(travelled), surface.frame.n().dot(wo));
+        if !(state.camera_ray && (material.holdout || !material.seen_by_camera)) {
+            let emitted = material.emitted(&surface.inputs, lambda, surface.frame.ng(), wo);
+            if emitted.max_element() > 0.0 {
+                let light = scene.triangle_light(hit.triangle);
+                let weight = match previous {
+                    Some(prev) if light != NOT_A_LIGHT => {
+                        emitter_weight(renderer, &arrived, prev, light as usize, wo)
+                    }
+                    _ => 1.0,
+                };
+                radiance += state.beta * emitted * weight;
+            }
+        }
+        let rng = &mut state.rng;
+        let lobe = material.lobe(&surface.inputs, surface.frame, wo, lambda, rng.next_1d());
+        if lobe.bsdf == Bsdf::Black {
+            break;
+        }
+        if lobe.bsdf == Bsdf::PassThrough {
+            state.origin = offset_origin(surface.p, surface.frame.ng(), -wo, surface.scale).into();
+            state.depth += 1;
+            continue;
+        }
+        if state.camera_ray && material.holdout {
+            coverage = 0.0;
+            break;
+        }
+        state.camera_ray = false;
+        let (frame, bsdf) = (lobe.frame, lobe.bsdf);
+        // The sums at the vertex take the cosine of the lobe's normals, as connections there do.
+        partials = partials.arrived(Some(travelled), frame.n().dot(wo));
+        travelled = 0.0;
+        segments += 1;
+        state.beta *= lobe.weight;
+        if !bsdf.is_delta() {
+            let camera = CameraVertex {
+                p: surface.p,
+                wo,
+                frame,
+                bsdf: &bsdf,
+                beta: state.beta,
+                hero_only: state.hero_only,
+                partials,
+                segments,
+            };
+            let at = (&camera, surface.scale);
+            radiance += direct_light(renderer, pass, weights, at, &mut state.rng, &mut stats);
+            radiance += connect(renderer, pass, weights, at, lights.path_of(pixel), MAX_DEPTH, &mut stats);
+            let (merged, merged_laplacian) = lights.merge_set.merge(weights, &camera, MAX_DEPTH);
+            radiance += merged;
+            laplacian += merged_laplacian;
+        }
+        let rng = &mut state.rng;
+        let u = rng.next_2d();
+        let u_lobe = bsdf.lobe_number(|| rng.next_1d());
+        let Some(sample) = bsdf.sample(frame, wo, u, u_lobe, Transport::Radiance) else {
+            break;
+        };
+        let survive = match segments > ROULETTE_AFTER {
+            true => (sample.weight.element_sum() / LANES as f32).min(1.0),
+            false => 1.0,
+        };
+        if survive < 1.0 && state.rng.next_1d() >= survive {
+            break;
+        }
+        let reverse = if sample.is_delta { sample.pdf } else { bsdf.pdf(frame, sample.wi, wo) };
+        let scatter = Scatter {
+            forward: sample.pdf,
+            reverse,
+            cos_out: frame.n().dot(sample.wi).abs(),
+            delta: sample.is_delta,
+        };
+        partials = partials.scattered(weights, scatter);
+        if !state.hero_only && material.separates_wavelengths(&bsdf) {
+            state.beta = hero_only(state.beta);
+            state.hero_only = true;
+        }
+        state.beta *= sample.weight / survive;
+        previous = Some(Previous { p: surface.p, n: frame.n() });
+        state.origin = offset_origin(surface.p, surface.frame.ng(), sample.wi, surface.scale).into();
+        state.direction = sample.wi.into();
+        state.depth += 1;
+    }
+    (PixelEstimate { radiance, laplacian, coverage }, stats)
+}
+
+/// The weight of emission from light `light` toward `wo` that a camera path of sums `arrived`
+/// meets, having scattered last at `prev`.
+fn emitter_weight(renderer: &Renderer, arrived: &Partials, prev: Previous, light: usize, wo: Vec3) -> f32 {
+    let Some(density) = renderer.scene.lights[light].emission_density(wo) else { return 1.0 };
+    let direct = renderer.light_probability(prev.p, prev.n, light) * density.direct;
+    let emission = renderer.light_choice.probability(light) * density.emission;
+    emitter_met(arrived, direct, emission)
+}
+
+/// What the distant lights send along `direction` to a camera path of sums `partials` that
+/// leaves the scene, each weighted against the other techniques (the camera's own ray: weight
+/// 1).
+fn escaped(
+    renderer: &Renderer,
+    pass: &PassSamples,
+    partials: &Partials,
+    previous: Option<Previous>,
+    direction: Vec3,
+) -> SampledSpectrum {
+    let scene = renderer.scene;
+    scene
+        .distant_lights
+        .iter()
+        .map(|&i| {
+            let radiance = scene.lights[i].escaped_radiance(direction, &pass.wavelengths);
+            let weight = match previous {
+                Some(prev) if radiance.max_element() > 0.0 => {
+                    emitter_weight(renderer, partials, prev, i, -direction)
+                }
+                _ => 1.0,
+            };
+            radiance * weight
+        })
+        .sum()
+}

@@ -1,0 +1,117 @@
+//! Vertex connection and merging (`--method vcm`): Georgiev, Křivánek, Davidovič & Slusallek
+//! 2012, and Hachisuka, Pantaleoni & Jensen 2012's unified path sampling. A pass traces one light
+//! subpath per photon and one camera subpath per pixel; every path is found by every technique
+//! that can sample it (a camera path meeting an emitter, next-event estimation, connecting the
+//! two subpaths' vertices, light tracing to the camera, and merging at the pass's radius) and the
+//! techniques are combined by multiple importance sampling (`mis.rs`), so caustics keep photon
+//! merging's robustness and diffuse light path tracing's rate of convergence.
+//!
+//! The stages: light subpaths (`light_paths.rs`, which also traces light to the camera), the
+//! light vertices bucketed for merging (`merge.rs`), and camera subpaths (`eye_paths.rs`) whose
+//! vertices run the estimators (`connect.rs`, `merge.rs`). A pass depends only on (scene,
+//! settings, seed, pass index), as an SPPM pass does, with the same radius sequence.
+//!
+//! Not yet rendered this way (a scene with them is refused with `--method vcm`): media, and
+//! point and spot lights with a radius. Reuse across frames does not share VCM paths: each frame
+//! renders its own.
+
+mod connect;
+mod eye_paths;
+mod light_paths;
+mod merge;
+mod mis;
+mod view;
+
+use rayon::prelude::*;
+
+use super::photons::photon_chunks;
+use super::renderer::{collect_counting, PassSamples, PassStats, PixelEstimate, Renderer};
+use crate::lights::Light;
+use crate::scene::Scene;
+use eye_paths::{trace_camera_path, Lights};
+use light_paths::{trace_light_path, LightVertex, Splat};
+use merge::MergeSet;
+use mis::PassWeights;
+use view::View;
+
+/// Why `scene` cannot be rendered by vertex connection and merging yet, if it cannot.
+pub fn unsupported(scene: &Scene) -> Option<String> {
+    if scene.materials.iter().any(|m| m.volume.is_some()) || scene.fog.is_some() {
+        return Some("media (volume absorption, scattering or fog)".into());
+    }
+    let sphere = scene.lights.iter().any(|l| matches!(l, Light::Sphere(s) if s.radius > 0.0));
+    sphere.then(|| "point and spot lights with a radius (set their radius to 0)".into())
+}
+
+/// One pass's light subpaths: their vertices path after path, where each path's start, and
+/// their light tracing contributions.
+struct LightSubpaths {
+    vertices: Vec<LightVertex>,
+    starts: Vec<usize>,
+    splats: Vec<Splat>,
+    stats: PassStats,
+}
+
+impl Renderer<'_> {
+    /// Renders `pass` by vertex connection and merging: one estimate per pixel, in row-major
+    /// order.
+    pub(super) fn run_vcm_pass(&self, pass: &PassSamples) -> (Vec<PixelEstimate>, PassStats) {
+        let paths = self.settings.photons_per_pass;
+        let weights = PassWeights::new(pass.radius, paths);
+        let view = View::new(self.scene.camera, self.settings.crop);
+        let light = self.trace_light_subpaths(pass, &weights, &view);
+        let merge_set = MergeSet::new(&light.vertices, pass.radius);
+        let lights = Lights { vertices: &light.vertices, starts: &light.starts, merge_set: &merge_set };
+        let pixels = (self.settings.width * self.settings.height) as usize;
+        let (mut estimates, stats) = collect_counting(pixels, |pixel| {
+            trace_camera_path(self, pass, (&weights, &view), &lights, pixel)
+        });
+        for &(pixel, radiance) in &light.splats {
+            estimates[pixel as usize].radiance += radiance;
+        }
+        (estimates, stats + light.stats)
+    }
+
+    /// The pass's light subpaths, traced in parallel chunks and joined in path order.
+    fn trace_light_subpaths(&self, pass: &PassSamples, weights: &PassWeights, view: &View) -> LightSubpaths {
+        let chunks: Vec<LightSubpaths> = photon_chunks(0..self.settings.photons_per_pass)
+            .map(|range| {
+                let mut chunk = LightSubpaths {
+                    vertices: Vec::new(),
+                    starts: Vec::new(),
+                    splats: Vec::new(),
+                    stats: PassStats::default(),
+                };
+                for k in range {
+                    chunk.starts.push(chunk.vertices.len());
+                    let stats = trace_light_path(
+                        self,
+                        pass,
+                        weights,
+                        view,
+                        k,
+                        &mut chunk.vertices,
+                        &mut chunk.splats,
+                    );
+                    chunk.stats = chunk.stats + stats;
+                }
+                chunk
+            })
+            .collect();
+        let mut all = LightSubpaths {
+            vertices: Vec::new(),
+            starts: Vec::new(),
+            splats: Vec::new(),
+            stats: PassStats::default(),
+        };
+        for chunk in chunks {
+            let offset = all.vertices.len();
+            all.starts.extend(chunk.starts.iter().map(|s| s + offset));
+            all.vertices.extend(chunk.vertices);
+            all.splats.extend(chunk.splats);
+            all.stats = all.stats + chunk.stats;
+        }
+        all.starts.push(all.vertices.len());
+        all
+    }
+}
