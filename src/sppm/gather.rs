@@ -256,14 +256,14 @@ pub fn sum_over(vp: &VisiblePoint, rounds: &[(&PhotonSet, FirstRound)]) -> Photo
 
 /// Photon positions, one array per coordinate, so that four distances are tested at once.
 /// Each array has three more entries than photons, far away, for the last group of four.
-struct Positions {
+pub(super) struct Positions {
     x: Vec<f32>,
     y: Vec<f32>,
     z: Vec<f32>,
 }
 
 impl Positions {
-    fn new(points: impl ExactSizeIterator<Item = Vec3>) -> Self {
+    pub(super) fn new(points: impl ExactSizeIterator<Item = Vec3>) -> Self {
         let padded = points.len() + 3;
         let mut positions = Positions {
             x: Vec::with_capacity(padded),
@@ -286,7 +286,7 @@ impl Positions {
     /// `p`. About one candidate in six is within reach, unpredictably: four distances are tested
     /// at a time, without branches, and only the hits are visited.
     #[inline]
-    fn for_each_within(&self, range: Range<usize>, p: Vec3, r2: f32, mut visit: impl FnMut(usize, f32)) {
+    pub(super) fn for_each_within(&self, range: Range<usize>, p: Vec3, r2: f32, mut visit: impl FnMut(usize, f32)) {
         let lane = Vec4::new(0.0, 1.0, 2.0, 3.0);
         for i in range.clone().step_by(4) {
             let dx = Vec4::from_slice(&self.x[i..i + 4]) - p.x;

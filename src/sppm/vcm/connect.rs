@@ -5,6 +5,7 @@
 use glam::Vec3;
 
 use super::light_paths::{joined, LightVertex};
+use super::finite;
 use super::merge::CameraVertex;
 use super::mis::{connection, DirectWeight, End, PassWeights};
 use crate::geometry::offset_origin;
@@ -83,7 +84,7 @@ pub fn direct_light(
     if through <= 0.0 {
         return SampledSpectrum::ZERO;
     }
-    camera.beta * f * sample.radiance_over_pdf * (cos_here * weight * through / p_choice)
+    finite(camera.beta * f * sample.radiance_over_pdf * (cos_here * weight * through / p_choice))
 }
 
 /// Connections from `camera` (on a triangle whose largest coordinate is `scale`) to each vertex
@@ -135,9 +136,10 @@ pub fn connect(
         };
         let weight = connection(weights, &light_end, &camera_end, distance2);
         let through = visibility(renderer, pass, (camera.p, camera.frame.ng(), scale), w, distance, stats);
-        if through > 0.0 {
-            let throughput = joined(camera.beta, camera.hero_only, light.throughput, light.hero_only);
-            sum += throughput * value * (weight * through);
+        let throughput = joined(camera.beta, camera.hero_only, light.throughput, light.hero_only);
+        let radiance = throughput * value * (weight * through);
+        if through > 0.0 && radiance.is_finite() {
+            sum += radiance;
         }
     }
     sum

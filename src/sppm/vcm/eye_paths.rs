@@ -10,6 +10,7 @@ use super::light_paths::LightVertex;
 use super::merge::{CameraVertex, MergeSet};
 use super::mis::{emitter_met, Partials, PassWeights, Scatter};
 use super::view::View;
+use super::finite;
 use crate::geometry::offset_origin;
 use crate::materials::{Bsdf, Transport};
 use crate::scene::NOT_A_LIGHT;
@@ -73,7 +74,7 @@ pub fn trace_camera_path(
             if state.camera_ray && scene.transparent_film {
                 coverage = 0.0;
             } else {
-                radiance += state.beta * escaped(renderer, pass, &partials, previous, direction);
+                radiance += finite(state.beta * escaped(renderer, pass, &partials, previous, direction));
             }
             break;
         };
@@ -92,7 +93,7 @@ pub fn trace_camera_path(
                     }
                     _ => 1.0,
                 };
-                radiance += state.beta * emitted * weight;
+                radiance += finite(state.beta * emitted * weight);
             }
         }
         let rng = &mut state.rng;

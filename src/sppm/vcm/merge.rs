@@ -2,12 +2,13 @@
 //! gather's biweight kernel (its Laplacian too, for the error bound's bias term).
 
 use glam::Vec3;
+use std::f32::consts::FRAC_1_PI;
 
 use super::light_paths::{joined, LightVertex};
 use super::mis::{merging, Partials, PassWeights};
 use crate::materials::{Bsdf, ShadingFrame};
 use crate::spectrum::SampledSpectrum;
-use crate::sppm::gather::Kernel;
+use crate::sppm::gather::{Kernel, Positions};
 use crate::sppm::grid::PhotonGrid;
 
 /// Light vertices on surfaces facing more away than this (in cosine of their geometric normals)
@@ -15,10 +16,9 @@ use crate::sppm::grid::PhotonGrid;
 /// floor) or the other face of a thin one.
 const FACING_COSINE: f32 = 0.5;
 
-/// What merging reads of a light vertex.
+/// What merging reads of a light vertex within reach, besides its position.
 #[derive(Clone, Copy, Debug)]
 struct Arrival {
-    p: Vec3,
     wi: Vec3,
     ng: Vec3,
     throughput: SampledSpectrum,
@@ -27,9 +27,11 @@ struct Arrival {
     segments: u32,
 }
 
-/// The pass's light vertices, sorted by grid bucket.
+/// The pass's light vertices, sorted by grid bucket, their positions kept apart (most of those in
+/// the cells around a point are out of reach: the distance test reads only their positions).
 pub struct MergeSet {
     sorted: Vec<Arrival>,
+    positions: Positions,
     grid: PhotonGrid,
     kernel: Kernel,
 }
@@ -65,7 +67,6 @@ impl MergeSet {
                 let v = &vertices[i as usize];
                 let ng = v.lobe.frame.ng();
                 Arrival {
-                    p: v.p,
                     wi: v.wo,
                     ng: if ng.dot(v.wo) < 0.0 { -ng } else { ng },
                     throughput: v.throughput,
@@ -75,7 +76,8 @@ impl MergeSet {
                 }
             })
             .collect();
-        MergeSet { sorted, grid, kernel: Kernel::new(radius) }
+        let positions = Positions::new(order.iter().map(|&i| positions[i as usize]));
+        MergeSet { sorted, positions, grid, kernel: Kernel::new(radius) }
     }
 
     /// The weighted radiance merging finds at `camera` (times its throughput), and the same with
@@ -89,32 +91,69 @@ impl MergeSet {
         let (mut sum, mut laplacian) = (SampledSpectrum::ZERO, SampledSpectrum::ZERO);
         let ng = camera.frame.ng();
         let front = if ng.dot(camera.wo) < 0.0 { -ng } else { ng };
+        let shading = Shading::of(camera);
         let r2 = self.kernel.r2;
         self.grid.for_each_near(camera.p, |range| {
-            for light in &self.sorted[range] {
-                let d2 = light.p.distance_squared(camera.p);
-                if d2 >= r2
-                    || light.segments + camera.segments > max_segments
-                    || light.ng.dot(front) < FACING_COSINE
-                {
-                    continue;
+            self.positions.for_each_within(range, camera.p, r2, |i, d2| {
+                let light = &self.sorted[i];
+                if light.segments + camera.segments > max_segments || light.ng.dot(front) < FACING_COSINE {
+                    return;
                 }
-                let f = camera.bsdf.eval(camera.frame, camera.wo, light.wi)
-                    * camera.frame.photon_cosine_ratio(light.wi);
-                if f.max_element() <= 0.0 {
-                    continue;
-                }
-                let forward = camera.bsdf.pdf(camera.frame, camera.wo, light.wi);
-                let reverse = camera.bsdf.pdf(camera.frame, light.wi, camera.wo);
+                let Some((f, forward, reverse)) = shading.toward(camera, light.wi) else { return };
                 let weight = merging(weights, &light.partials, &camera.partials, forward, reverse);
-                let value =
-                    joined(camera.beta, camera.hero_only, light.throughput, light.hero_only) * f * weight;
+                let value = joined(camera.beta, camera.hero_only, light.throughput, light.hero_only) * f * weight;
+                if !value.is_finite() {
+                    return;
+                }
                 let t2 = d2 / r2;
                 sum += value * ((1.0 - t2) * (1.0 - t2));
                 laplacian += value * (1.0 - 2.0 * t2);
-            }
+            });
         });
         let per_path = 1.0 / weights.light_paths;
         (sum * (self.kernel.scale * per_path), laplacian * (self.kernel.laplacian_scale * per_path))
+    }
+}
+
+/// How a camera vertex's BSDF is read for each light vertex merged there: a Lambertian one
+/// without a normal map from numbers found once (most merges are on such surfaces), any other by
+/// evaluating it.
+enum Shading {
+    /// `f = albedo / pi` in front of the shading normal `n` on the camera's side; the density of
+    /// the camera's direction from any light direction is `reverse`.
+    Lambertian { f: SampledSpectrum, n: Vec3, reverse: f32 },
+    /// Evaluated per light vertex.
+    General,
+}
+
+impl Shading {
+    fn of(camera: &CameraVertex) -> Self {
+        match *camera.bsdf {
+            Bsdf::Diffuse { albedo } if !camera.frame.is_bent() => {
+                let n = camera.frame.toward(camera.wo);
+                Shading::Lambertian { f: albedo * FRAC_1_PI, n, reverse: n.dot(camera.wo).max(0.0) * FRAC_1_PI }
+            }
+            _ => Shading::General,
+        }
+    }
+
+    /// The BSDF for light arriving from `wi`, and its densities of `wi` (forward) and of the way
+    /// back (reverse); `None` where it is zero.
+    #[inline]
+    fn toward(&self, camera: &CameraVertex, wi: Vec3) -> Option<(SampledSpectrum, f32, f32)> {
+        match *self {
+            Shading::Lambertian { f, n, reverse } => {
+                let cos = n.dot(wi);
+                (cos > 0.0).then_some((f, cos * FRAC_1_PI, reverse))
+            }
+            Shading::General => {
+                let f = camera.bsdf.eval(camera.frame, camera.wo, wi) * camera.frame.photon_cosine_ratio(wi);
+                if f.max_element() <= 0.0 {
+                    return None;
+                }
+                let forward = camera.bsdf.pdf(camera.frame, camera.wo, wi);
+                Some((f, forward, camera.bsdf.pdf(camera.frame, wi, camera.wo)))
+            }
+        }
     }
 }

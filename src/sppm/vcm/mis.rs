@@ -17,6 +17,19 @@ pub fn mis(x: f32) -> f32 {
     x * x
 }
 
+/// The weight of a technique whose density, relative to the others' summed in `others` (each
+/// over its own), is 1. Where the sums overflow (a vertex seen at a grazing angle, two vertices
+/// nearly touching) and make no number, the sample is left out: weight 0.
+#[inline]
+fn share(others: f32) -> f32 {
+    let weight = 1.0 / (1.0 + others);
+    if weight.is_nan() {
+        0.0
+    } else {
+        weight
+    }
+}
+
 /// What every weight of a pass shares: its merging radius and light path count.
 #[derive(Clone, Copy, Debug)]
 pub struct PassWeights {
@@ -123,7 +136,7 @@ impl Partials {
 /// solid angle for distant lights), `emission` the light's density of emitting the path's last
 /// segment (choice included). A camera ray meeting it first has weight 1.
 pub fn emitter_met(camera: &Partials, direct: f32, emission: f32) -> f32 {
-    1.0 / (1.0 + mis(direct) * camera.vcm + mis(emission) * camera.vc)
+    share(mis(direct) * camera.vcm + mis(emission) * camera.vc)
 }
 
 /// The weight of next-event estimation: a light picked with probability `p_choice` and a
@@ -154,7 +167,7 @@ impl DirectWeight {
         let w_light = mis(self.bsdf_forward / (self.p_choice * self.direct));
         let w_camera = mis(self.emission * self.cos_here / (self.p_choice * self.direct * self.cos_light))
             * (pass.vm_factor + camera.vcm + camera.vc * mis(self.bsdf_reverse));
-        1.0 / (w_light + 1.0 + w_camera)
+        share(w_light + w_camera)
     }
 }
 
@@ -181,7 +194,7 @@ pub fn connection(pass: &PassWeights, light: &End, camera: &End, distance2: f32)
         mis(camera_to_light) * (pass.vm_factor + light.partials.vcm + light.partials.vc * mis(light.reverse));
     let w_camera = mis(light_to_camera)
         * (pass.vm_factor + camera.partials.vcm + camera.partials.vc * mis(camera.reverse));
-    1.0 / (w_light + 1.0 + w_camera)
+    share(w_light + w_camera)
 }
 
 /// The weight of merging a light vertex of sums `light` at a camera vertex of sums `camera`,
@@ -190,7 +203,7 @@ pub fn connection(pass: &PassWeights, light: &End, camera: &End, distance2: f32)
 pub fn merging(pass: &PassWeights, light: &Partials, camera: &Partials, forward: f32, reverse: f32) -> f32 {
     let w_light = light.vcm * pass.vc_factor + light.vm * mis(forward);
     let w_camera = camera.vcm * pass.vc_factor + camera.vm * mis(reverse);
-    1.0 / (w_light + 1.0 + w_camera)
+    share(w_light + w_camera)
 }
 
 /// The weight of a light vertex of sums `light` seen by the camera (light tracing): the camera's
@@ -199,5 +212,5 @@ pub fn merging(pass: &PassWeights, light: &Partials, camera: &Partials, forward:
 pub fn light_traced(pass: &PassWeights, light: &Partials, camera_area: f32, reverse: f32) -> f32 {
     let w_light =
         mis(camera_area / pass.light_paths) * (pass.vm_factor + light.vcm + light.vc * mis(reverse));
-    1.0 / (w_light + 1.0)
+    share(w_light)
 }

@@ -28,6 +28,7 @@ use super::photons::photon_chunks;
 use super::renderer::{collect_counting, PassSamples, PassStats, PixelEstimate, Renderer};
 use crate::lights::Light;
 use crate::scene::Scene;
+use crate::spectrum::SampledSpectrum;
 use eye_paths::{trace_camera_path, Lights};
 use light_paths::{trace_light_path, LightVertex, Splat};
 use merge::MergeSet;
@@ -41,6 +42,16 @@ pub fn unsupported(scene: &Scene) -> Option<String> {
     }
     let sphere = scene.lights.iter().any(|l| matches!(l, Light::Sphere(s) if s.radius > 0.0));
     sphere.then(|| "point and spot lights with a radius (set their radius to 0)".into())
+}
+
+/// `value`, or zero where it is not a finite number (a weight or density that overflowed at a
+/// grazing angle or between nearly touching vertices).
+fn finite(value: SampledSpectrum) -> SampledSpectrum {
+    if value.is_finite() {
+        value
+    } else {
+        SampledSpectrum::ZERO
+    }
 }
 
 /// One pass's light subpaths: their vertices path after path, where each path's start, and
