@@ -286,7 +286,13 @@ impl Positions {
     /// `p`. About one candidate in six is within reach, unpredictably: four distances are tested
     /// at a time, without branches, and only the hits are visited.
     #[inline]
-    pub(super) fn for_each_within(&self, range: Range<usize>, p: Vec3, r2: f32, mut visit: impl FnMut(usize, f32)) {
+    pub(super) fn for_each_within(
+        &self,
+        range: Range<usize>,
+        p: Vec3,
+        r2: f32,
+        mut visit: impl FnMut(usize, f32),
+    ) {
         let lane = Vec4::new(0.0, 1.0, 2.0, 3.0);
         for i in range.clone().step_by(4) {
             let dx = Vec4::from_slice(&self.x[i..i + 4]) - p.x;

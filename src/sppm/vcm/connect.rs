@@ -4,8 +4,8 @@
 
 use glam::Vec3;
 
-use super::light_paths::{joined, LightVertex};
 use super::finite;
+use super::light_paths::{joined, LightVertex};
 use super::merge::CameraVertex;
 use super::mis::{connection, DirectWeight, End, PassWeights};
 use crate::geometry::offset_origin;

@@ -6,11 +6,11 @@
 use glam::Vec3;
 
 use super::connect::{connect, direct_light};
+use super::finite;
 use super::light_paths::LightVertex;
 use super::merge::{CameraVertex, MergeSet};
 use super::mis::{emitter_met, Partials, PassWeights, Scatter};
 use super::view::View;
-use super::finite;
 use crate::geometry::offset_origin;
 use crate::materials::{Bsdf, Transport};
 use crate::scene::NOT_A_LIGHT;

@@ -101,7 +101,8 @@ impl MergeSet {
                 }
                 let Some((f, forward, reverse)) = shading.toward(camera, light.wi) else { return };
                 let weight = merging(weights, &light.partials, &camera.partials, forward, reverse);
-                let value = joined(camera.beta, camera.hero_only, light.throughput, light.hero_only) * f * weight;
+                let value =
+                    joined(camera.beta, camera.hero_only, light.throughput, light.hero_only) * f * weight;
                 if !value.is_finite() {
                     return;
                 }
@@ -131,7 +132,11 @@ impl Shading {
         match *camera.bsdf {
             Bsdf::Diffuse { albedo } if !camera.frame.is_bent() => {
                 let n = camera.frame.toward(camera.wo);
-                Shading::Lambertian { f: albedo * FRAC_1_PI, n, reverse: n.dot(camera.wo).max(0.0) * FRAC_1_PI }
+                Shading::Lambertian {
+                    f: albedo * FRAC_1_PI,
+                    n,
+                    reverse: n.dot(camera.wo).max(0.0) * FRAC_1_PI,
+                }
             }
             _ => Shading::General,
         }

@@ -214,3 +214,179 @@ pub fn light_traced(pass: &PassWeights, light: &Partials, camera_area: f32, reve
         mis(camera_area / pass.light_paths) * (pass.vm_factor + light.vcm + light.vc * mis(reverse));
     share(w_light)
 }
+
+#[cfg(test)]
+mod tests {
+    //! The weights of every technique that can sample a path sum to one: checked on random paths
+    //! of Lambertian vertices between an area light and a pinhole camera, each technique's
+    //! weight found as its estimator finds it (the sums carried along each subpath, then the
+    //! technique's own densities).
+    use super::*;
+    use glam::Vec3;
+    use std::f32::consts::FRAC_1_PI;
+
+    /// A path `v[0]` (on the light) .. `v[k]` (the camera), each vertex with a unit normal.
+    struct Path {
+        p: Vec<Vec3>,
+        n: Vec<Vec3>,
+    }
+
+    /// The pass: its weights, the light's area, its choice probabilities (emission by power,
+    /// next-event estimation by the tree: different) and the camera's density of the path's first
+    /// direction.
+    struct Setup {
+        pass: PassWeights,
+        area: f32,
+        p_emit: f32,
+        p_nee: f32,
+        camera_pdf: f32,
+    }
+
+    impl Path {
+        fn dir(&self, from: usize, to: usize) -> Vec3 {
+            (self.p[to] - self.p[from]).normalize()
+        }
+        fn d2(&self, a: usize, b: usize) -> f32 {
+            self.p[a].distance_squared(self.p[b])
+        }
+        fn cos(&self, at: usize, to: usize) -> f32 {
+            self.n[at].dot(self.dir(at, to)).abs()
+        }
+        /// A Lambertian vertex's density of the direction toward `to` (any incoming direction).
+        fn pdf(&self, at: usize, to: usize) -> f32 {
+            self.cos(at, to) * FRAC_1_PI
+        }
+        /// The light subpath's sums at `v[last]`, as `light_paths.rs` carries them.
+        fn light_sums(&self, s: &Setup, last: usize) -> Partials {
+            let emission = self.cos(0, 1) * FRAC_1_PI / s.area * s.p_emit;
+            let mut sums =
+                Partials::leaving_light(&s.pass, emission, 1.0 / s.area, self.cos(0, 1), false, true);
+            for i in 1..=last {
+                sums = sums.arrived(Some(self.d2(i - 1, i).sqrt()), self.cos(i, i - 1));
+                if i == 1 {
+                    sums = sums.chosen_at(s.p_nee);
+                }
+                if i < last {
+                    let scatter = Scatter {
+                        forward: self.pdf(i, i + 1),
+                        reverse: self.pdf(i, i - 1),
+                        cos_out: self.cos(i, i + 1),
+                        delta: false,
+                    };
+                    sums = sums.scattered(&s.pass, scatter);
+                }
+            }
+            sums
+        }
+        /// The camera subpath's sums at `v[last]`, as `eye_paths.rs` carries them.
+        fn camera_sums(&self, s: &Setup, last: usize) -> Partials {
+            let k = self.p.len() - 1;
+            let mut sums = Partials::leaving_camera(&s.pass, s.camera_pdf, true);
+            for i in (last..k).rev() {
+                sums = sums.arrived(Some(self.d2(i + 1, i).sqrt()), self.cos(i, i + 1));
+                if i > last {
+                    let scatter = Scatter {
+                        forward: self.pdf(i, i - 1),
+                        reverse: self.pdf(i, i + 1),
+                        cos_out: self.cos(i, i - 1),
+                        delta: false,
+                    };
+                    sums = sums.scattered(&s.pass, scatter);
+                }
+            }
+            sums
+        }
+        /// Every technique's weight for the path.
+        fn weights(&self, s: &Setup) -> Vec<(String, f32)> {
+            let k = self.p.len() - 1;
+            let mut all = Vec::new();
+            // The camera path meets the light.
+            let direct_area = s.p_nee / s.area;
+            let emission = self.cos(0, 1) * FRAC_1_PI / s.area * s.p_emit;
+            all.push(("emitter met".into(), emitter_met(&self.camera_sums(s, 0), direct_area, emission)));
+            // Next-event estimation at v[1].
+            let nee = DirectWeight {
+                p_choice: s.p_nee,
+                direct: self.d2(0, 1) / (s.area * self.cos(0, 1)),
+                bsdf_forward: self.pdf(1, 0),
+                bsdf_reverse: self.pdf(1, 2),
+                emission,
+                cos_light: self.cos(0, 1),
+                cos_here: self.cos(1, 0),
+            };
+            all.push(("next-event".into(), nee.weight(&s.pass, &self.camera_sums(s, 1))));
+            // Connections v[i - 1] (light) to v[i] (camera).
+            for i in 2..k {
+                let light = End {
+                    partials: self.light_sums(s, i - 1),
+                    forward: self.pdf(i - 1, i),
+                    reverse: self.pdf(i - 1, i - 2),
+                    cos: self.cos(i - 1, i),
+                };
+                let camera = End {
+                    partials: self.camera_sums(s, i),
+                    forward: self.pdf(i, i - 1),
+                    reverse: self.pdf(i, i + 1),
+                    cos: self.cos(i, i - 1),
+                };
+                all.push((
+                    format!("connection {i}"),
+                    connection(&s.pass, &light, &camera, self.d2(i - 1, i)),
+                ));
+            }
+            // Light tracing from v[k - 1].
+            let camera_area = s.camera_pdf * self.cos(k - 1, k) / self.d2(k - 1, k);
+            all.push((
+                "light traced".into(),
+                light_traced(&s.pass, &self.light_sums(s, k - 1), camera_area, self.pdf(k - 1, k - 2)),
+            ));
+            // Merging at each inner vertex.
+            for i in 1..k {
+                let w = merging(
+                    &s.pass,
+                    &self.light_sums(s, i),
+                    &self.camera_sums(s, i),
+                    self.pdf(i, i - 1),
+                    self.pdf(i, i + 1),
+                );
+                all.push((format!("merge {i}"), w));
+            }
+            all
+        }
+    }
+
+    /// A small deterministic stream of uniform numbers.
+    struct Lcg(u64);
+
+    impl Lcg {
+        fn next(&mut self) -> f32 {
+            self.0 = self.0.wrapping_mul(6364136223846793005).wrapping_add(1442695040888963407);
+            (self.0 >> 40) as f32 / (1u64 << 24) as f32
+        }
+        fn vec(&mut self) -> Vec3 {
+            Vec3::new(self.next(), self.next(), self.next()) * 2.0 - 1.0
+        }
+    }
+
+    #[test]
+    fn every_techniques_weight_sums_to_one_along_random_paths() {
+        let mut rng = Lcg(7);
+        for trial in 0..200 {
+            let k = 2 + trial % 6;
+            let p: Vec<Vec3> = (0..=k).map(|_| rng.vec()).collect();
+            let n: Vec<Vec3> = (0..=k).map(|_| rng.vec().normalize()).collect();
+            let path = Path { p, n };
+            let setup = Setup {
+                pass: PassWeights::new(0.01 + 0.2 * rng.next(), 1000 + (rng.next() * 50000.0) as usize),
+                area: 0.1 + rng.next(),
+                p_emit: 0.05 + 0.95 * rng.next(),
+                p_nee: 0.05 + 0.95 * rng.next(),
+                camera_pdf: 1e4 + 1e6 * rng.next(),
+            };
+            let weights = path.weights(&setup);
+            let sum: f32 = weights.iter().map(|(_, w)| w).sum();
+            assert!((sum - 1.0).abs() < 1e-3, "path of {k} segments: weights sum to {sum}: {weights:?}");
+            assert!(weights.iter().all(|(_, w)| (0.0..=1.0).contains(w)), "{weights:?}");
+        }
+    }
+}
