@@ -4,7 +4,7 @@
 
 use glam::Vec3;
 
-use super::finite;
+use super::{finite, kept};
 use super::light_paths::{joined, LightVertex};
 use super::merge::CameraVertex;
 use super::mis::{connection, DirectWeight, End, PassWeights};
@@ -84,7 +84,8 @@ pub fn direct_light(
     if through <= 0.0 {
         return SampledSpectrum::ZERO;
     }
-    finite(camera.beta * f * sample.radiance_over_pdf * (cos_here * weight * through / p_choice))
+    let kept = kept(renderer, &pass.wavelengths, camera.media, (camera.frame.ng(), camera.wo), sample.wi, sample.distance);
+    finite(camera.beta * f * kept * sample.radiance_over_pdf * (cos_here * weight * through / p_choice))
 }
 
 /// Connections from `camera` (on a triangle whose largest coordinate is `scale`) to each vertex
@@ -137,7 +138,8 @@ pub fn connect(
         let weight = connection(weights, &light_end, &camera_end, distance2);
         let through = visibility(renderer, pass, (camera.p, camera.frame.ng(), scale), w, distance, stats);
         let throughput = joined(camera.beta, camera.hero_only, light.throughput, light.hero_only);
-        let radiance = throughput * value * (weight * through);
+        let kept = kept(renderer, &pass.wavelengths, camera.media, (camera.frame.ng(), camera.wo), w, distance);
+        let radiance = throughput * value * kept * (weight * through);
         if through > 0.0 && radiance.is_finite() {
             sum += radiance;
         }

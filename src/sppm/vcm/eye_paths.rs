@@ -73,12 +73,17 @@ pub fn trace_camera_path(
         let Some(hit) = renderer.accel.intersect(state.origin.into(), direction, f32::INFINITY) else {
             if state.camera_ray && scene.transparent_film {
                 coverage = 0.0;
-            } else {
+            } else if !(renderer.has_volumes && state.media.medium(scene).is_some()) {
                 radiance += finite(state.beta * escaped(renderer, pass, &partials, previous, direction));
             }
             break;
         };
         travelled += hit.t;
+        if renderer.has_volumes {
+            if let Some(kept) = state.media.transmittance(scene, lambda, hit.t) {
+                state.beta *= kept;
+            }
+        }
         let surface = scene.surface(&hit, lambda);
         let material = &scene.materials[surface.material as usize];
         let wo = -direction;
@@ -127,6 +132,7 @@ pub fn trace_camera_path(
                 hero_only: state.hero_only,
                 partials,
                 segments,
+                media: (state.media, surface.material),
             };
             let at = (&camera, surface.scale);
             radiance += direct_light(renderer, pass, weights, at, &mut state.rng, &mut stats);
@@ -161,6 +167,9 @@ pub fn trace_camera_path(
             state.hero_only = true;
         }
         state.beta *= sample.weight / survive;
+        if renderer.has_volumes {
+            state.media = state.media.crossed(scene, surface.material, surface.frame.ng(), wo, sample.wi);
+        }
         previous = Some(Previous { p: surface.p, n: frame.n() });
         state.origin = offset_origin(surface.p, surface.frame.ng(), sample.wi, surface.scale).into();
         state.direction = sample.wi.into();

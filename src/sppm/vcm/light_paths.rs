@@ -6,6 +6,8 @@ use glam::{Vec3, Vec3A};
 
 use super::mis::{light_traced, Partials, PassWeights, Scatter};
 use super::view::View;
+use super::kept;
+use crate::sppm::media::Media;
 use crate::geometry::offset_origin;
 use crate::materials::{Bsdf, Lobe, Transport};
 use crate::sampling::Sampler;
@@ -33,6 +35,8 @@ pub struct LightVertex {
     pub segments: u32,
     /// The largest coordinate of its triangle (for offsetting rays that leave it).
     pub scale: f32,
+    /// The volumes the path arrived in, and the surface's material.
+    pub media: (Media, u32),
 }
 
 impl LightVertex {
@@ -78,6 +82,8 @@ struct Walk {
     /// Whether the path left a distant light and has met nothing yet.
     from_distance: bool,
     segments: u32,
+    /// The volumes it is in.
+    media: Media,
     rng: Sampler,
 }
 
@@ -109,6 +115,11 @@ pub fn trace_light_path(
         let rng = &mut walk.rng;
         let lobe = material.lobe(&surface.inputs, surface.frame, wo, lambda, rng.next_1d());
         walk.travelled += hit.t;
+        if renderer.has_volumes {
+            if let Some(kept) = walk.media.transmittance(scene, lambda, hit.t) {
+                walk.throughput *= kept;
+            }
+        }
         if lobe.bsdf == Bsdf::Black {
             break;
         }
@@ -136,6 +147,7 @@ pub fn trace_light_path(
                 partials: walk.partials,
                 segments: walk.segments,
                 scale: surface.scale,
+                media: (walk.media, surface.material),
             };
             if let Some(splat) = to_camera(renderer, pass, weights, view, &vertex, &mut stats) {
                 splats.push(splat);
@@ -162,6 +174,9 @@ pub fn trace_light_path(
             walk.hero_only = true;
         }
         walk.throughput *= weight / survive;
+        if renderer.has_volumes {
+            walk.media = walk.media.crossed(scene, surface.material, surface.frame.ng(), wo, sample.wi);
+        }
         walk.origin = offset_origin(surface.p, surface.frame.ng(), sample.wi, surface.scale).into();
         walk.direction = sample.wi.into();
     }
@@ -193,6 +208,7 @@ fn start(renderer: &Renderer, pass: &PassSamples, weights: &PassWeights, k: u64)
         travelled: 0.0,
         from_distance: !density.finite,
         segments: 0,
+        media: renderer.light_media(light),
         rng,
     })
 }
@@ -227,6 +243,7 @@ fn to_camera(
     if through <= 0.0 {
         return None;
     }
-    let radiance = vertex.throughput * f * (weight * camera_area * through / weights.light_paths);
+    let kept = kept(renderer, &pass.wavelengths, vertex.media, (vertex.lobe.frame.ng(), vertex.wo), toward, landing.distance);
+    let radiance = vertex.throughput * f * kept * (weight * camera_area * through / weights.light_paths);
     radiance.is_finite().then_some((landing.pixel as u32, radiance))
 }

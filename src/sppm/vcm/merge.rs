@@ -10,6 +10,7 @@ use crate::materials::{Bsdf, ShadingFrame};
 use crate::spectrum::SampledSpectrum;
 use crate::sppm::gather::{Kernel, Positions};
 use crate::sppm::grid::PhotonGrid;
+use crate::sppm::media::Media;
 
 /// Light vertices on surfaces facing more away than this (in cosine of their geometric normals)
 /// from a camera vertex's are not merged there: they lie on another surface (a wall meeting the
@@ -54,6 +55,9 @@ pub struct CameraVertex<'a> {
     pub partials: Partials,
     /// Segments from the camera.
     pub segments: u32,
+    /// The volumes the camera path arrived in, and the material of the surface (for what a
+    /// segment leaving the vertex runs through).
+    pub media: (Media, u32),
 }
 
 impl MergeSet {

@@ -11,8 +11,10 @@
 //! vertices run the estimators (`connect.rs`, `merge.rs`). A pass depends only on (scene,
 //! settings, seed, pass index), as an SPPM pass does, with the same radius sequence.
 //!
-//! Not yet rendered this way (a scene with them is refused with `--method vcm`): media, and
-//! point and spot lights with a radius. Reuse across frames does not share VCM paths: each frame
+//! Media that only absorb (coloured glass, water, gems) weigh every segment and connection by
+//! their transmittance, which every technique computes alike and leaves out of the weights. Not
+//! yet rendered this way (a scene with them is refused with `--method vcm`): media that scatter,
+//! and point and spot lights with a radius. Reuse across frames does not share VCM paths: each frame
 //! renders its own.
 
 mod connect;
@@ -27,8 +29,10 @@ use rayon::prelude::*;
 use super::photons::photon_chunks;
 use super::renderer::{collect_counting, PassSamples, PassStats, PixelEstimate, Renderer};
 use crate::lights::Light;
-use crate::scene::Scene;
-use crate::spectrum::SampledSpectrum;
+use crate::scene::{media_scatter, Scene};
+use crate::spectrum::{SampledSpectrum, Wavelengths};
+use glam::Vec3;
+use super::media::Media;
 use eye_paths::{trace_camera_path, Lights};
 use light_paths::{trace_light_path, LightVertex, Splat};
 use merge::MergeSet;
@@ -37,8 +41,8 @@ use view::View;
 
 /// Why `scene` cannot be rendered by vertex connection and merging yet, if it cannot.
 pub fn unsupported(scene: &Scene) -> Option<String> {
-    if scene.materials.iter().any(|m| m.volume.is_some()) || scene.fog.is_some() {
-        return Some("media (volume absorption, scattering or fog)".into());
+    if media_scatter(&scene.materials, &scene.fog) {
+        return Some("media that scatter (volume scattering or fog)".into());
     }
     let sphere = scene.lights.iter().any(|l| matches!(l, Light::Sphere(s) if s.radius > 0.0));
     sphere.then(|| "point and spot lights with a radius (set their radius to 0)".into())
@@ -52,6 +56,25 @@ fn finite(value: SampledSpectrum) -> SampledSpectrum {
     } else {
         SampledSpectrum::ZERO
     }
+}
+
+/// What the volume a segment leaving a vertex toward `w` runs through keeps of light over
+/// `length` (all of it where nothing absorbs): the volumes `media` the path arrived in, crossed
+/// into the inside of the surface's `material` (geometric normal `ng`, arrived from `wo`) where
+/// `w` goes in.
+fn kept(
+    renderer: &Renderer,
+    lambda: &Wavelengths,
+    (media, material): (Media, u32),
+    (ng, wo): (Vec3, Vec3),
+    w: Vec3,
+    length: f32,
+) -> SampledSpectrum {
+    if !renderer.has_volumes {
+        return SampledSpectrum::ONE;
+    }
+    let scene = renderer.scene;
+    media.crossed(scene, material, ng, wo, w).transmittance(scene, lambda, length).unwrap_or(SampledSpectrum::ONE)
 }
 
 /// One pass's light subpaths: their vertices path after path, where each path's start, and
