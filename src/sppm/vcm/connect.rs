@@ -4,10 +4,10 @@
 
 use glam::Vec3;
 
-use super::{finite, kept};
 use super::light_paths::{joined, LightVertex};
 use super::merge::CameraVertex;
 use super::mis::{connection, DirectWeight, End, PassWeights};
+use super::{finite, kept};
 use crate::geometry::offset_origin;
 use crate::sampling::PixelSampler;
 use crate::spectrum::SampledSpectrum;
@@ -42,7 +42,6 @@ fn visibility(
 pub fn direct_light(
     renderer: &Renderer,
     pass: &PassSamples,
-    weights: &PassWeights,
     (camera, scale): (&CameraVertex, f32),
     rng: &mut PixelSampler,
     stats: &mut PassStats,
@@ -78,13 +77,20 @@ pub fn direct_light(
         cos_light: density.cos,
         cos_here,
     };
-    let weight = mis.weight(weights, &camera.partials);
+    let weight = mis.weight(&camera.partials);
     let through =
         visibility(renderer, pass, (camera.p, camera.frame.ng(), scale), sample.wi, sample.distance, stats);
     if through <= 0.0 {
         return SampledSpectrum::ZERO;
     }
-    let kept = kept(renderer, &pass.wavelengths, camera.media, (camera.frame.ng(), camera.wo), sample.wi, sample.distance);
+    let kept = kept(
+        renderer,
+        &pass.wavelengths,
+        camera.media,
+        (camera.frame.ng(), camera.wo),
+        sample.wi,
+        sample.distance,
+    );
     finite(camera.beta * f * kept * sample.radiance_over_pdf * (cos_here * weight * through / p_choice))
 }
 
@@ -128,17 +134,20 @@ pub fn connect(
             forward: bsdf.pdf(frame, light.wo, -w),
             reverse: bsdf.pdf(frame, -w, light.wo),
             cos: cos_light,
+            merged: light.segments > 1,
         };
         let camera_end = End {
             partials: camera.partials,
             forward: camera.bsdf.pdf(camera.frame, camera.wo, w),
             reverse: camera.bsdf.pdf(camera.frame, w, camera.wo),
             cos: cos_camera,
+            merged: true,
         };
         let weight = connection(weights, &light_end, &camera_end, distance2);
         let through = visibility(renderer, pass, (camera.p, camera.frame.ng(), scale), w, distance, stats);
         let throughput = joined(camera.beta, camera.hero_only, light.throughput, light.hero_only);
-        let kept = kept(renderer, &pass.wavelengths, camera.media, (camera.frame.ng(), camera.wo), w, distance);
+        let kept =
+            kept(renderer, &pass.wavelengths, camera.media, (camera.frame.ng(), camera.wo), w, distance);
         let radiance = throughput * value * kept * (weight * through);
         if through > 0.0 && radiance.is_finite() {
             sum += radiance;

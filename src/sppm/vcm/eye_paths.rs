@@ -135,7 +135,7 @@ pub fn trace_camera_path(
                 media: (state.media, surface.material),
             };
             let at = (&camera, surface.scale);
-            radiance += direct_light(renderer, pass, weights, at, &mut state.rng, &mut stats);
+            radiance += direct_light(renderer, pass, at, &mut state.rng, &mut stats);
             radiance += connect(renderer, pass, weights, at, lights.path_of(pixel), MAX_DEPTH, &mut stats);
             let (merged, merged_laplacian) = lights.merge_set.merge(weights, &camera, MAX_DEPTH);
             radiance += merged;
@@ -161,7 +161,7 @@ pub fn trace_camera_path(
             cos_out: frame.n().dot(sample.wi).abs(),
             delta: sample.is_delta,
         };
-        partials = partials.scattered(weights, scatter);
+        partials = partials.scattered(weights, scatter, true);
         if !state.hero_only && material.separates_wavelengths(&bsdf) {
             state.beta = hero_only(state.beta);
             state.hero_only = true;

@@ -4,14 +4,14 @@
 
 use glam::{Vec3, Vec3A};
 
-use super::mis::{light_traced, Partials, PassWeights, Scatter};
-use super::view::View;
 use super::kept;
-use crate::sppm::media::Media;
+use super::mis::{light_traced, End, Partials, PassWeights, Scatter};
+use super::view::View;
 use crate::geometry::offset_origin;
 use crate::materials::{Bsdf, Lobe, Transport};
 use crate::sampling::Sampler;
 use crate::spectrum::{hero_only, SampledSpectrum, LANES};
+use crate::sppm::media::Media;
 use crate::sppm::photons::photon_stream;
 use crate::sppm::renderer::{PassSamples, PassStats, Renderer, MAX_DEPTH};
 use crate::sppm::see_through;
@@ -168,7 +168,7 @@ pub fn trace_light_path(
         let reverse = if sample.is_delta { sample.pdf } else { bsdf.pdf(lobe.frame, sample.wi, wo) };
         let scatter =
             Scatter { forward: sample.pdf, reverse, cos_out: n.dot(sample.wi).abs(), delta: sample.is_delta };
-        walk.partials = walk.partials.scattered(weights, scatter);
+        walk.partials = walk.partials.scattered(weights, scatter, walk.segments > 1);
         if !walk.hero_only && material.separates_wavelengths(&bsdf) {
             walk.throughput = hero_only(walk.throughput);
             walk.hero_only = true;
@@ -235,7 +235,9 @@ fn to_camera(
     // The camera's density of the vertex per area, in pixels.
     let camera_area = landing.pdf * cos_here / (landing.distance * landing.distance);
     let reverse = vertex.lobe.bsdf.pdf(vertex.lobe.frame, toward, vertex.wo);
-    let weight = light_traced(weights, &vertex.partials, camera_area, reverse);
+    let end =
+        End { partials: vertex.partials, forward: 0.0, reverse, cos: cos_here, merged: vertex.segments > 1 };
+    let weight = light_traced(weights, &end, camera_area);
     stats.shadow_rays += 1;
     let origin = offset_origin(vertex.p, vertex.lobe.frame.ng(), toward, vertex.scale);
     let t_max = landing.distance * (1.0 - 1e-4);
@@ -243,7 +245,14 @@ fn to_camera(
     if through <= 0.0 {
         return None;
     }
-    let kept = kept(renderer, &pass.wavelengths, vertex.media, (vertex.lobe.frame.ng(), vertex.wo), toward, landing.distance);
+    let kept = kept(
+        renderer,
+        &pass.wavelengths,
+        vertex.media,
+        (vertex.lobe.frame.ng(), vertex.wo),
+        toward,
+        landing.distance,
+    );
     let radiance = vertex.throughput * f * kept * (weight * camera_area * through / weights.light_paths);
     radiance.is_finite().then_some((landing.pixel as u32, radiance))
 }

@@ -61,14 +61,16 @@ pub struct CameraVertex<'a> {
 }
 
 impl MergeSet {
-    /// The light vertices of `vertices` for merging within `radius`.
+    /// The light vertices of `vertices` for merging within `radius`: those a segment or more past
+    /// their light's first vertex (direct light is not merged).
     pub fn new(vertices: &[LightVertex], radius: f32) -> Self {
+        let vertices: Vec<&LightVertex> = vertices.iter().filter(|v| v.segments > 1).collect();
         let positions: Vec<Vec3> = vertices.iter().map(|v| v.p).collect();
         let (grid, order) = PhotonGrid::build(&positions, radius);
         let sorted = order
             .iter()
             .map(|&i| {
-                let v = &vertices[i as usize];
+                let v = vertices[i as usize];
                 let ng = v.lobe.frame.ng();
                 Arrival {
                     wi: v.wo,

@@ -7,6 +7,13 @@
 //! heuristic (`mis(x) = x^2`), and merging counted as a technique of density `pi r^2` times the
 //! light paths of the pass (its acceptance probability).
 //!
+//! Direct light is never merged (as SPPM stores no photon at a path's first vertex): merging a
+//! light path's first vertex would blur what next-event estimation finds sharp (a shadow's edge),
+//! and where a light emits into a narrow beam the weights would hand direct light to merging.
+//! Merging there is left out of every weight: of light vertices one segment from their light
+//! (their own merge, and the `vm_factor` terms for merging them), and of a camera vertex's next-
+//! event estimation and of a camera path meeting a light (`vc_to_light`).
+//!
 //! Densities are of the hero wavelength's BSDF (every technique uses the same ones, so the
 //! weights of a path still sum to one), and leave Russian roulette out (every technique leaves it
 //! out alike).
@@ -58,6 +65,9 @@ pub struct Partials {
     pub vc: f32,
     /// Merging.
     pub vm: f32,
+    /// `vc` for a camera path whose next vertex is on a light: without merging at the vertex it
+    /// left, which is a light path's first (direct light is not merged).
+    pub vc_to_light: f32,
 }
 
 /// The densities of a scattering at a vertex: of the direction sampled (`forward`) and of the way
@@ -92,7 +102,7 @@ impl Partials {
             (false, true) => mis(cos / emission),
             (false, false) => mis(1.0 / emission),
         };
-        Partials { vcm, vc, vm: vc * pass.vc_factor }
+        Partials { vcm, vc, vm: vc * pass.vc_factor, vc_to_light: vc }
     }
 
     /// The camera path through one pixel, whose direction's density per solid angle in units of
@@ -100,7 +110,7 @@ impl Partials {
     /// `light_tracing`.
     pub fn leaving_camera(pass: &PassWeights, camera_pdf: f32, light_tracing: bool) -> Self {
         let vcm = if light_tracing { mis(pass.light_paths / camera_pdf) } else { 0.0 };
-        Partials { vcm, vc: 0.0, vm: 0.0 }
+        Partials { vcm, vc: 0.0, vm: 0.0, vc_to_light: 0.0 }
     }
 
     /// A light path's first vertex: next-event estimation there chooses its light with
@@ -114,19 +124,24 @@ impl Partials {
     pub fn arrived(self, distance: Option<f32>, cos: f32) -> Self {
         let vcm = distance.map_or(self.vcm, |d| self.vcm * mis(d * d));
         let inv = 1.0 / mis(cos.abs().max(1e-7));
-        Partials { vcm: vcm * inv, vc: self.vc * inv, vm: self.vm * inv }
+        Partials { vcm: vcm * inv, vc: self.vc * inv, vm: self.vm * inv, vc_to_light: self.vc_to_light * inv }
     }
 
-    /// Leaving a vertex by `scatter`.
-    pub fn scattered(self, pass: &PassWeights, s: Scatter) -> Self {
+    /// Leaving a vertex by `scatter`; `merged` whether merging at the vertex is a technique (not
+    /// at a light path's first vertex).
+    pub fn scattered(self, pass: &PassWeights, s: Scatter, merged: bool) -> Self {
         if s.delta {
-            return Partials { vcm: 0.0, vc: self.vc * mis(s.cos_out), vm: self.vm * mis(s.cos_out) };
+            let cos = mis(s.cos_out);
+            return Partials { vcm: 0.0, vc: self.vc * cos, vm: self.vm * cos, vc_to_light: self.vc * cos };
         }
         let out = mis(s.cos_out / s.forward);
+        let connected = self.vc * mis(s.reverse) + self.vcm;
+        let merging = if merged { 1.0 } else { 0.0 };
         Partials {
-            vc: out * (self.vc * mis(s.reverse) + self.vcm + pass.vm_factor),
-            vm: out * (self.vm * mis(s.reverse) + self.vcm * pass.vc_factor + 1.0),
+            vc: out * (connected + pass.vm_factor * merging),
+            vm: out * (self.vm * mis(s.reverse) + self.vcm * pass.vc_factor + merging),
             vcm: mis(1.0 / s.forward),
+            vc_to_light: out * connected,
         }
     }
 }
@@ -136,7 +151,7 @@ impl Partials {
 /// solid angle for distant lights), `emission` the light's density of emitting the path's last
 /// segment (choice included). A camera ray meeting it first has weight 1.
 pub fn emitter_met(camera: &Partials, direct: f32, emission: f32) -> f32 {
-    share(mis(direct) * camera.vcm + mis(emission) * camera.vc)
+    share(mis(direct) * camera.vcm + mis(emission) * camera.vc_to_light)
 }
 
 /// The weight of next-event estimation: a light picked with probability `p_choice` and a
@@ -163,16 +178,17 @@ pub struct DirectWeight {
 
 impl DirectWeight {
     /// The weight, for a camera path whose sums are `camera`.
-    pub fn weight(&self, pass: &PassWeights, camera: &Partials) -> f32 {
+    pub fn weight(&self, camera: &Partials) -> f32 {
         let w_light = mis(self.bsdf_forward / (self.p_choice * self.direct));
         let w_camera = mis(self.emission * self.cos_here / (self.p_choice * self.direct * self.cos_light))
-            * (pass.vm_factor + camera.vcm + camera.vc * mis(self.bsdf_reverse));
+            * (camera.vcm + camera.vc * mis(self.bsdf_reverse));
         share(w_light + w_camera)
     }
 }
 
 /// One end of a connection: the subpath's sums, and at its vertex the BSDF's density of the
-/// connecting direction (`forward`) and of the way back (`reverse`), and the cosine there.
+/// connecting direction (`forward`) and of the way back (`reverse`), the cosine there, and
+/// whether merging at the vertex is a technique (not at a light path's first vertex).
 #[derive(Clone, Copy, Debug)]
 pub struct End {
     /// The subpath's sums.
@@ -183,6 +199,19 @@ pub struct End {
     pub reverse: f32,
     /// Cosine of the connecting direction at this end.
     pub cos: f32,
+    /// Merging at this end's vertex is a technique.
+    pub merged: bool,
+}
+
+impl End {
+    /// What merging at this end's vertex adds to the weights: `vm_factor`, or 0.
+    fn merging(&self, pass: &PassWeights) -> f32 {
+        if self.merged {
+            pass.vm_factor
+        } else {
+            0.0
+        }
+    }
 }
 
 /// The weight of connecting a light vertex to a camera vertex `distance2` apart (squared).
@@ -190,10 +219,10 @@ pub fn connection(pass: &PassWeights, light: &End, camera: &End, distance2: f32)
     // Each end's density of the other's vertex, per area there.
     let camera_to_light = camera.forward * light.cos / distance2;
     let light_to_camera = light.forward * camera.cos / distance2;
-    let w_light =
-        mis(camera_to_light) * (pass.vm_factor + light.partials.vcm + light.partials.vc * mis(light.reverse));
+    let w_light = mis(camera_to_light)
+        * (light.merging(pass) + light.partials.vcm + light.partials.vc * mis(light.reverse));
     let w_camera = mis(light_to_camera)
-        * (pass.vm_factor + camera.partials.vcm + camera.partials.vc * mis(camera.reverse));
+        * (camera.merging(pass) + camera.partials.vcm + camera.partials.vc * mis(camera.reverse));
     share(w_light + w_camera)
 }
 
@@ -206,12 +235,12 @@ pub fn merging(pass: &PassWeights, light: &Partials, camera: &Partials, forward:
     share(w_light + w_camera)
 }
 
-/// The weight of a light vertex of sums `light` seen by the camera (light tracing): the camera's
-/// density of the vertex per area, in pixels (`camera_area`), and the BSDF's density of the
-/// light vertex's incoming direction from the camera's (`reverse`).
-pub fn light_traced(pass: &PassWeights, light: &Partials, camera_area: f32, reverse: f32) -> f32 {
-    let w_light =
-        mis(camera_area / pass.light_paths) * (pass.vm_factor + light.vcm + light.vc * mis(reverse));
+/// The weight of a light vertex seen by the camera (light tracing): `light` the vertex's end
+/// toward the camera (its `forward` density and cosine are not read), `camera_area` the camera's
+/// density of the vertex per area, in pixels.
+pub fn light_traced(pass: &PassWeights, light: &End, camera_area: f32) -> f32 {
+    let w_light = mis(camera_area / pass.light_paths)
+        * (light.merging(pass) + light.partials.vcm + light.partials.vc * mis(light.reverse));
     share(w_light)
 }
 
@@ -273,7 +302,7 @@ mod tests {
                         cos_out: self.cos(i, i + 1),
                         delta: false,
                     };
-                    sums = sums.scattered(&s.pass, scatter);
+                    sums = sums.scattered(&s.pass, scatter, i > 1);
                 }
             }
             sums
@@ -291,7 +320,7 @@ mod tests {
                         cos_out: self.cos(i, i - 1),
                         delta: false,
                     };
-                    sums = sums.scattered(&s.pass, scatter);
+                    sums = sums.scattered(&s.pass, scatter, true);
                 }
             }
             sums
@@ -314,7 +343,7 @@ mod tests {
                 cos_light: self.cos(0, 1),
                 cos_here: self.cos(1, 0),
             };
-            all.push(("next-event".into(), nee.weight(&s.pass, &self.camera_sums(s, 1))));
+            all.push(("next-event".into(), nee.weight(&self.camera_sums(s, 1))));
             // Connections v[i - 1] (light) to v[i] (camera).
             for i in 2..k {
                 let light = End {
@@ -322,12 +351,14 @@ mod tests {
                     forward: self.pdf(i - 1, i),
                     reverse: self.pdf(i - 1, i - 2),
                     cos: self.cos(i - 1, i),
+                    merged: i - 1 > 1,
                 };
                 let camera = End {
                     partials: self.camera_sums(s, i),
                     forward: self.pdf(i, i - 1),
                     reverse: self.pdf(i, i + 1),
                     cos: self.cos(i, i - 1),
+                    merged: true,
                 };
                 all.push((
                     format!("connection {i}"),
@@ -336,12 +367,16 @@ mod tests {
             }
             // Light tracing from v[k - 1].
             let camera_area = s.camera_pdf * self.cos(k - 1, k) / self.d2(k - 1, k);
-            all.push((
-                "light traced".into(),
-                light_traced(&s.pass, &self.light_sums(s, k - 1), camera_area, self.pdf(k - 1, k - 2)),
-            ));
-            // Merging at each inner vertex.
-            for i in 1..k {
+            let light = End {
+                partials: self.light_sums(s, k - 1),
+                forward: 0.0,
+                reverse: self.pdf(k - 1, k - 2),
+                cos: self.cos(k - 1, k),
+                merged: k - 1 > 1,
+            };
+            all.push(("light traced".into(), light_traced(&s.pass, &light, camera_area)));
+            // Merging at each inner vertex but the first (direct light is not merged).
+            for i in 2..k {
                 let w = merging(
                     &s.pass,
                     &self.light_sums(s, i),

@@ -26,14 +26,14 @@ mod view;
 
 use rayon::prelude::*;
 
+use super::media::Media;
 use super::photons::photon_chunks;
 use super::renderer::{collect_counting, PassSamples, PassStats, PixelEstimate, Renderer};
 use crate::lights::Light;
 use crate::scene::{media_scatter, Scene};
 use crate::spectrum::{SampledSpectrum, Wavelengths};
-use glam::Vec3;
-use super::media::Media;
 use eye_paths::{trace_camera_path, Lights};
+use glam::Vec3;
 use light_paths::{trace_light_path, LightVertex, Splat};
 use merge::MergeSet;
 use mis::PassWeights;
@@ -74,7 +74,10 @@ fn kept(
         return SampledSpectrum::ONE;
     }
     let scene = renderer.scene;
-    media.crossed(scene, material, ng, wo, w).transmittance(scene, lambda, length).unwrap_or(SampledSpectrum::ONE)
+    media
+        .crossed(scene, material, ng, wo, w)
+        .transmittance(scene, lambda, length)
+        .unwrap_or(SampledSpectrum::ONE)
 }
 
 /// One pass's light subpaths: their vertices path after path, where each path's start, and
