@@ -139,3 +139,31 @@ fn vcm_refuses_a_light_with_a_radius_by_name() {
     );
     assert!(!out.join("frame_0001.exr").exists());
 }
+
+/// From the command line: `--method vcm` on a scene with fog that scatters exits non-zero with a
+/// message naming the media and the way out, and writes nothing; an unknown method is refused by
+/// the flag's parser, naming the methods there are.
+#[test]
+fn vcm_on_scattering_fog_is_refused_from_the_command_line() {
+    let dir = tempfile::tempdir().unwrap();
+    let out = dir.path().join("out");
+    let scene = bundled_scene("fog_spot.gltf");
+    let run = run_caustic(&[
+        "render",
+        scene.to_str().unwrap(),
+        "--method",
+        "vcm",
+        "--passes",
+        "1",
+        "--out",
+        out.to_str().unwrap(),
+    ]);
+    let stderr = String::from_utf8_lossy(&run.stderr);
+    assert!(!run.status.success(), "it should fail: {stderr}");
+    assert!(stderr.contains("media that scatter") && stderr.contains("--method sppm"), "{stderr}");
+    assert!(!out.join("frame_0001.exr").exists());
+    let run =
+        run_caustic(&["render", scene.to_str().unwrap(), "--method", "bdpt", "--out", out.to_str().unwrap()]);
+    let stderr = String::from_utf8_lossy(&run.stderr);
+    assert!(!run.status.success() && stderr.contains("sppm") && stderr.contains("vcm"), "{stderr}");
+}
