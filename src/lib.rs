@@ -10,6 +10,7 @@
 //!        materials, lights, camera (leaves)          |
 //!                                                    v
 //!                 sppm::Renderer::run_pass(i) -> per-pixel estimates at lambda_i, time_i
+//!                                 (SPPM's gather, or sppm::vcm's connections and merging)
 //!                 sppm::run_shared_pass(i) -> the same for a block of frames, sharing the
 //!                                             paths on static triangles (DSPPM)
 //!                                                    v
