@@ -32,6 +32,7 @@ use super::renderer::{PassSamples, PassStats, Renderer, VisiblePoint, MAX_DEPTH}
 use crate::geometry::offset_origin;
 use crate::materials::{transmittance, Bsdf, Lobe, Transport};
 use crate::sampling::{pixel_stream, PixelSampler};
+use crate::scene::Surface;
 use crate::spectrum::{hero_only, SampledSpectrum, Wavelengths};
 
 /// A pixel's eye path: the radiance found along it, and its visible point if it has one.
@@ -83,6 +84,41 @@ pub struct EyeEnd {
     pub radiance_before: SampledSpectrum,
     /// Light-sampled and BSDF-sampled direct light at the visible point.
     pub direct: [DirectTerm; 2],
+}
+
+/// What meeting a surface's lobe does to an eye path.
+pub enum Meeting {
+    /// The path ends there: a black lobe, or a holdout the camera sees (coverage 0).
+    Ends {
+        /// The path's coverage of the film.
+        coverage: f32,
+    },
+    /// Alpha cuts the surface away there: the path goes on past it with the sample the last
+    /// vertex drew (and took direct light for, if it did).
+    PassesThrough,
+    /// The path scatters there.
+    Scatters,
+}
+
+impl EyeState {
+    /// Meets the lobe `bsdf` of a surface (a holdout if `holdout`) seen from `wo`: moves the
+    /// path past it where alpha cuts it away, and the path is no longer the camera's own ray
+    /// where it scatters.
+    pub fn meet(&mut self, bsdf: &Bsdf, holdout: bool, surface: &Surface, wo: Vec3) -> Meeting {
+        if *bsdf == Bsdf::Black {
+            return Meeting::Ends { coverage: 1.0 };
+        }
+        if *bsdf == Bsdf::PassThrough {
+            self.origin = offset_origin(surface.p, surface.frame.ng(), -wo, surface.scale).into();
+            self.depth += 1;
+            return Meeting::PassesThrough;
+        }
+        if self.camera_ray && holdout {
+            return Meeting::Ends { coverage: 0.0 };
+        }
+        self.camera_ray = false;
+        Meeting::Scatters
+    }
 }
 
 /// Pixel `pixel`'s camera ray for `pass` (the film sample and, with a lens, the aperture sample).
@@ -183,24 +219,17 @@ pub fn continue_eye_path(
             state.radiance +=
                 state.beta * material.emitted(&surface.inputs, &pass.wavelengths, surface.frame.ng(), wo);
         }
-        let rng = &mut state.rng;
         let Lobe { frame, bsdf, weight, .. } =
-            material.lobe(&surface.inputs, surface.frame, wo, &pass.wavelengths, rng.next_1d());
-        if bsdf == Bsdf::Black {
-            break;
+            material.lobe(&surface.inputs, surface.frame, wo, &pass.wavelengths, state.rng.next_1d());
+        match state.meet(&bsdf, material.holdout, &surface, wo) {
+            Meeting::Ends { coverage: seen } => {
+                coverage = seen;
+                break;
+            }
+            Meeting::PassesThrough => continue,
+            Meeting::Scatters => {}
         }
-        // Passing where alpha cuts the surface away goes on with the sample the last vertex drew
-        // (and took direct light for, if it did).
-        if bsdf == Bsdf::PassThrough {
-            state.origin = offset_origin(surface.p, surface.frame.ng(), -wo, surface.scale).into();
-            state.depth += 1;
-            continue;
-        }
-        if state.camera_ray && material.holdout {
-            coverage = 0.0;
-            break;
-        }
-        state.camera_ray = false;
+        let rng = &mut state.rng;
         state.beta *= weight;
         let vertex =
             VisiblePoint::new(surface.p, frame, wo, bsdf, state.beta, state.hero_only, surface.scale);

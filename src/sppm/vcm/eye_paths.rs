@@ -12,11 +12,11 @@ use super::merge::{CameraVertex, MergeSet};
 use super::mis::{emitter_met, Partials, PassWeights, Scatter};
 use super::view::View;
 use crate::geometry::offset_origin;
-use crate::materials::{Bsdf, Transport};
+use crate::materials::Transport;
 use crate::scene::NOT_A_LIGHT;
 use crate::spectrum::{hero_only, SampledSpectrum, LANES};
 use crate::sppm::renderer::{PassSamples, PassStats, PixelEstimate, Renderer, MAX_DEPTH};
-use crate::sppm::visible::start_eye_path;
+use crate::sppm::visible::{start_eye_path, Meeting};
 
 /// Bounces before Russian roulette may end a camera path.
 const ROULETTE_AFTER: u32 = 3;
@@ -101,21 +101,15 @@ pub fn trace_camera_path(
                 radiance += finite(state.beta * emitted * weight);
             }
         }
-        let rng = &mut state.rng;
-        let lobe = material.lobe(&surface.inputs, surface.frame, wo, lambda, rng.next_1d());
-        if lobe.bsdf == Bsdf::Black {
-            break;
+        let lobe = material.lobe(&surface.inputs, surface.frame, wo, lambda, state.rng.next_1d());
+        match state.meet(&lobe.bsdf, material.holdout, &surface, wo) {
+            Meeting::Ends { coverage: seen } => {
+                coverage = seen;
+                break;
+            }
+            Meeting::PassesThrough => continue,
+            Meeting::Scatters => {}
         }
-        if lobe.bsdf == Bsdf::PassThrough {
-            state.origin = offset_origin(surface.p, surface.frame.ng(), -wo, surface.scale).into();
-            state.depth += 1;
-            continue;
-        }
-        if state.camera_ray && material.holdout {
-            coverage = 0.0;
-            break;
-        }
-        state.camera_ray = false;
         let (frame, bsdf) = (lobe.frame, lobe.bsdf);
         // The sums at the vertex take the cosine of the lobe's normals, as connections there do.
         partials = partials.arrived(Some(travelled), frame.n().dot(wo));

@@ -82,6 +82,7 @@ fn kept(
 
 /// One pass's light subpaths: their vertices path after path, where each path's start, and
 /// their light tracing contributions.
+#[derive(Default)]
 struct LightSubpaths {
     vertices: Vec<LightVertex>,
     starts: Vec<usize>,
@@ -113,12 +114,7 @@ impl Renderer<'_> {
     fn trace_light_subpaths(&self, pass: &PassSamples, weights: &PassWeights, view: &View) -> LightSubpaths {
         let chunks: Vec<LightSubpaths> = photon_chunks(0..self.settings.photons_per_pass)
             .map(|range| {
-                let mut chunk = LightSubpaths {
-                    vertices: Vec::new(),
-                    starts: Vec::new(),
-                    splats: Vec::new(),
-                    stats: PassStats::default(),
-                };
+                let mut chunk = LightSubpaths::default();
                 for k in range {
                     chunk.starts.push(chunk.vertices.len());
                     let stats = trace_light_path(
@@ -135,12 +131,7 @@ impl Renderer<'_> {
                 chunk
             })
             .collect();
-        let mut all = LightSubpaths {
-            vertices: Vec::new(),
-            starts: Vec::new(),
-            splats: Vec::new(),
-            stats: PassStats::default(),
-        };
+        let mut all = LightSubpaths::default();
         for chunk in chunks {
             let offset = all.vertices.len();
             all.starts.extend(chunk.starts.iter().map(|s| s + offset));
