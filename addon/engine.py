@@ -49,6 +49,8 @@ def render_flags(scene):
         flags += ["--target-error", repr(settings.target_error)]
     if settings.photons > 0:
         flags += ["--photons", str(settings.photons)]
+    if settings.method == 'VCM':
+        flags += ["--method", "vcm"]
     if settings.threads > 0:
         flags += ["--threads", str(settings.threads)]
     return flags

@@ -78,6 +78,14 @@ class CausticRenderSettings(bpy.types.PropertyGroup):
                                 description="Mean relative error bound (90% confidence) at which a frame ends")
     photons: IntProperty(name="Photons per Pass", default=0, min=0,
                          description="Photon paths per pass (0: one per pixel)")
+    method: EnumProperty(
+        name="Method",
+        items=[("SPPM", "Photon Mapping", "Stochastic progressive photon mapping: photons gathered where each pixel's "
+                                          "path first meets a diffuse surface"),
+               ("VCM", "Connection and Merging", "Vertex connection and merging: photon merging at every bounce, "
+                                                 "combined with path tracing, light tracing and connections (not yet "
+                                                 "for fog that scatters, nor point and spot lights with a radius)")],
+        default="SPPM", description="How each pass combines camera paths and photon paths")
     alpha: FloatProperty(name="Alpha", default=2.0 / 3.0, min=0.01, max=0.99,
                          description="How fast the gather radius shrinks (Knaus & Zwicker)")
     seed: IntProperty(name="Seed", default=1, min=0, description="The same seed gives the same image")

@@ -37,6 +37,7 @@ class RENDER_PT_caustic_sampling(CausticPanel, bpy.types.Panel):
         row = layout.row(heading="Target Error")
         row.prop(settings, "use_target_error", text="")
         row.prop(settings, "target_error", text="")
+        layout.prop(settings, "method")
         layout.prop(settings, "photons")
         layout.prop(settings, "alpha")
         layout.prop(settings, "seed")

@@ -3,7 +3,7 @@
 
 mod common;
 
-use caustic::frames::{self, RenderSettings};
+use caustic::frames::{self, Method, RenderSettings};
 use common::*;
 use std::path::{Path, PathBuf};
 
@@ -37,8 +37,18 @@ fn partial(base: &RenderSettings, out: &Path, passes: std::ops::Range<u64>) -> P
 /// within 1e-6 relative (sums in f64 added in another order; in practice the same bits).
 #[test]
 fn merged_pass_ranges_equal_the_whole_run() {
+    assert_merged_pass_ranges_equal_the_whole_run(Method::Sppm);
+}
+
+/// The same for passes of vertex connection and merging (their light tracing on the film too).
+#[test]
+fn merged_vcm_pass_ranges_equal_the_whole_run() {
+    assert_merged_pass_ranges_equal_the_whole_run(Method::Vcm);
+}
+
+fn assert_merged_pass_ranges_equal_the_whole_run(method: Method) {
     let dir = tempfile::tempdir().unwrap();
-    let whole = shot_settings(&dir.path().join("whole"));
+    let whole = RenderSettings { method, ..shot_settings(&dir.path().join("whole")) };
     render_frames(&whole);
     let parts = dir.path().join("parts");
     partial(&whole, &parts, 3..8);
@@ -88,8 +98,11 @@ fn merges_that_do_not_add_up_are_refused() {
         RenderSettings { scene: bundled_scene("shot_moving_camera.gltf"), ..base.clone() };
     let other_scene = partial(&other_scene_settings, &dir.path().join("f"), 4..8);
     let frame_two = caustic::partial::partial_path(&dir.path().join("b"), 2, &(4..8));
+    let other_method =
+        partial(&RenderSettings { method: Method::Vcm, ..base.clone() }, &dir.path().join("g"), 4..8);
 
     assert_mentions(&merge_error(&[a.clone(), other_seed]), &["do not belong together", "seed 1 vs 7"]);
+    assert_mentions(&merge_error(&[a.clone(), other_method]), &["do not belong together", "method"]);
     assert_mentions(
         &merge_error(&[a.clone(), other_scene]),
         &["scenes differ", "shot.gltf", "shot_moving_camera.gltf"],

@@ -164,6 +164,26 @@ class StillRenders(unittest.TestCase):
         # The same scene, settings and seed: the same image, up to Blender's EXR round trip.
         np.testing.assert_allclose(image, cli, rtol=1e-5, atol=1e-6)
 
+    def test_connection_and_merging_renders_through_blender_as_on_the_command_line(self):
+        """The Method setting's Connection and Merging renders the ball's caustic through
+        Blender, the same image the command line gives with `--method vcm`."""
+        scene = glass_sphere_scene()
+        scene.caustic.method = 'VCM'
+        try:
+            flags = ENGINE.render_flags(scene)
+            image = render_still("vcm")
+        finally:
+            scene.caustic.method = 'SPPM'
+        self.assertIn("vcm", flags)
+        caustic, beside = block(image, pixel_of(scene, (0, 0, 0))), block(image, pixel_of(scene, (1.6, 0, 0)))
+        self.assertGreater(caustic, 3.0 * beside)
+        exported = OUT / "vcm_cli" / "scene.gltf"
+        exported.parent.mkdir()
+        sys.modules["caustic.export"].export(scene, exported)
+        subprocess.run([BINARY, "render", str(exported), "-o", str(OUT / "vcm_cli"), "--progress", "none", *flags],
+                       check=True)
+        np.testing.assert_allclose(image, read_exr(OUT / "vcm_cli" / "frame_0001.exr"), rtol=1e-5, atol=1e-6)
+
     def test_a_render_region_renders_the_same_pixels_there(self):
         """A render region (Blender's border), cropped to or placed in the whole image, holds the
         pixels the whole image's render has there, and nothing elsewhere."""
