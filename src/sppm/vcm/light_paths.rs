@@ -82,6 +82,8 @@ struct Walk {
     /// Whether the path left a distant light and has met nothing yet.
     from_distance: bool,
     segments: u32,
+    /// Rays traced, past surfaces alpha cuts away too (at most [`MAX_DEPTH`]).
+    rays: u32,
     /// The volumes it is in.
     media: Media,
     rng: Sampler,
@@ -102,7 +104,8 @@ pub fn trace_light_path(
     let Some(mut walk) = start(renderer, pass, weights, k) else { return stats };
     let scene = renderer.scene;
     let lambda = &pass.wavelengths;
-    while walk.segments < MAX_DEPTH {
+    while walk.rays < MAX_DEPTH {
+        walk.rays += 1;
         stats.photon_rays += 1;
         let Some(hit) =
             renderer.accel.intersect_opaque(walk.origin.into(), walk.direction.into(), f32::INFINITY)
@@ -208,6 +211,7 @@ fn start(renderer: &Renderer, pass: &PassSamples, weights: &PassWeights, k: u64)
         travelled: 0.0,
         from_distance: !density.finite,
         segments: 0,
+        rays: 0,
         media: renderer.light_media(light),
         rng,
     })
