@@ -10,7 +10,7 @@
 
 mod common;
 
-use caustic::frames::{self, RenderSettings};
+use caustic::frames::{self, Method, RenderSettings};
 use caustic::scene::Description;
 use proptest::prelude::*;
 use rand::{Rng, RngExt, SeedableRng};
@@ -34,7 +34,8 @@ fn scenes() -> PathBuf {
     Path::new(env!("CARGO_MANIFEST_DIR")).join("scenes")
 }
 
-/// Loads `path` and, when it loads, renders one 4x4 pass with 16 photons; a panic anywhere fails.
+/// Loads `path` and, when it loads, renders one 4x4 pass with 16 photons by each method (SPPM,
+/// and vertex connection and merging where it renders the scene); a panic anywhere fails.
 fn load_and_render(path: &Path) -> Result<(), String> {
     let outcome = std::panic::catch_unwind(|| {
         if Description::load(path).is_err() {
@@ -45,6 +46,8 @@ fn load_and_render(path: &Path) -> Result<(), String> {
         s.passes = Some(1);
         s.resolution = Some([4, 4]);
         s.photons = Some(16);
+        let _ = frames::render(&s);
+        s.method = Method::Vcm;
         let _ = frames::render(&s);
     });
     outcome.map_err(|panic| {
