@@ -227,6 +227,9 @@ pub fn default_radius(scene: &Scene, view: Option<ViewMeasure>, photons_per_pass
 /// scene is animated, so that frames sharing photon paths (reuse across frames, which draws them
 /// uniformly) give the images `--no-reuse` and a farm's single frames give.
 fn photon_sampling(settings: &RenderSettings, description: &Description) -> PhotonSampling {
+    if settings.method == Method::Vcm {
+        return PhotonSampling::Uniform;
+    }
     match settings.photon_sampling {
         PhotonSampling::Auto if is_animated(description) => PhotonSampling::Uniform,
         chosen => chosen,
@@ -535,6 +538,13 @@ impl Shot {
 /// has left as the first run did.
 pub fn render(settings: &RenderSettings) -> Result<RenderReport, String> {
     let description = Arc::new(load_description(settings)?);
+    if settings.method == Method::Vcm && settings.photon_sampling != PhotonSampling::Uniform {
+        let chosen = clap::ValueEnum::to_possible_value(&settings.photon_sampling);
+        eprintln!(
+            "caustic: warning: --photon-sampling {} is not used by --method vcm, whose light paths are drawn uniformly",
+            chosen.map_or_else(String::new, |v| v.get_name().to_string())
+        );
+    }
     std::fs::create_dir_all(&settings.out_dir)
         .map_err(|e| format!("cannot create output folder {}: {e}", settings.out_dir.display()))?;
     let mut report = RenderReport::default();

@@ -167,3 +167,25 @@ fn vcm_on_scattering_fog_is_refused_from_the_command_line() {
     let stderr = String::from_utf8_lossy(&run.stderr);
     assert!(!run.status.success() && stderr.contains("sppm") && stderr.contains("vcm"), "{stderr}");
 }
+
+/// Visibility-driven photon sampling is SPPM's: under `--method vcm` it is named in a warning as
+/// not used, and the render goes on with uniform light paths (the same image as asking for them).
+#[test]
+fn vcm_names_photon_sampling_it_does_not_use() {
+    let dir = tempfile::tempdir().unwrap();
+    let scene = bundled_scene("cornell_glass.gltf");
+    let render = |sampling: &str, out: &str| {
+        let out = dir.path().join(out);
+        let args = ["render", scene.to_str().unwrap(), "--method", "vcm", "--photon-sampling", sampling];
+        let more =
+            ["--passes", "1", "--resolution", "32x24", "--progress", "none", "--out", out.to_str().unwrap()];
+        let run = run_caustic(&[&args[..], &more[..]].concat());
+        assert!(run.status.success(), "{}", String::from_utf8_lossy(&run.stderr));
+        (String::from_utf8_lossy(&run.stderr).to_string(), read_exr(&out.join("frame_0001.exr")).rgb)
+    };
+    let (warning, visible) = render("visible", "visible");
+    assert!(warning.contains("--photon-sampling visible is not used by --method vcm"), "{warning}");
+    let (quiet, uniform) = render("uniform", "uniform");
+    assert!(!quiet.contains("warning"), "{quiet}");
+    assert!(visible == uniform, "the images differ");
+}
