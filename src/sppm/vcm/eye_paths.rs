@@ -35,11 +35,11 @@ impl Lights<'_> {
     /// The light path paired with film pixel `pixel`.
     fn path_of(&self, pixel: usize) -> &[LightVertex] {
         let paths = self.starts.len() - 1;
-        let k = pixel % paths.max(1);
-        match paths {
-            0 => &[],
-            _ => &self.vertices[self.starts[k]..self.starts[k + 1]],
+        if paths == 0 {
+            return &[];
         }
+        let k = pixel % paths;
+        &self.vertices[self.starts[k]..self.starts[k + 1]]
     }
 }
 
@@ -87,13 +87,13 @@ pub fn trace_camera_path(
         let surface = scene.surface(&hit, lambda);
         let material = &scene.materials[surface.material as usize];
         let wo = -direction;
-        let arrived = partials.arrived(Some(travelled), surface.frame.n().dot(wo));
         if !(state.camera_ray && (material.holdout || !material.seen_by_camera)) {
             let emitted = material.emitted(&surface.inputs, lambda, surface.frame.ng(), wo);
             if emitted.max_element() > 0.0 {
                 let light = scene.triangle_light(hit.triangle);
                 let weight = match previous {
                     Some(prev) if light != NOT_A_LIGHT => {
+                        let arrived = partials.arrived(Some(travelled), surface.frame.n().dot(wo));
                         emitter_weight(renderer, &arrived, prev, light as usize, wo)
                     }
                     _ => 1.0,
