@@ -247,9 +247,10 @@ pub fn light_traced(pass: &PassWeights, light: &End, camera_area: f32) -> f32 {
 #[cfg(test)]
 mod tests {
     //! The weights of every technique that can sample a path sum to one: checked on random paths
-    //! of Lambertian vertices between an area light and a pinhole camera, each technique's
-    //! weight found as its estimator finds it (the sums carried along each subpath, then the
-    //! technique's own densities).
+    //! of Lambertian and delta (mirror or glass) vertices between an area light and a pinhole
+    //! camera, each technique's weight found as its estimator finds it (the sums carried along
+    //! each subpath, then the technique's own densities). No technique connects or merges at a
+    //! delta vertex.
     use super::*;
     use glam::Vec3;
     use std::f32::consts::FRAC_1_PI;
@@ -258,6 +259,8 @@ mod tests {
     struct Path {
         p: Vec<Vec3>,
         n: Vec<Vec3>,
+        /// Which vertices scatter by a delta lobe (never the light's or the camera's).
+        delta: Vec<bool>,
     }
 
     /// The pass: its weights, the light's area, its choice probabilities (emission by power,
@@ -300,7 +303,7 @@ mod tests {
                         forward: self.pdf(i, i + 1),
                         reverse: self.pdf(i, i - 1),
                         cos_out: self.cos(i, i + 1),
-                        delta: false,
+                        delta: self.delta[i],
                     };
                     sums = sums.scattered(&s.pass, scatter, i > 1);
                 }
@@ -318,7 +321,7 @@ mod tests {
                         forward: self.pdf(i, i - 1),
                         reverse: self.pdf(i, i + 1),
                         cos_out: self.cos(i, i - 1),
-                        delta: false,
+                        delta: self.delta[i],
                     };
                     sums = sums.scattered(&s.pass, scatter, true);
                 }
@@ -343,9 +346,11 @@ mod tests {
                 cos_light: self.cos(0, 1),
                 cos_here: self.cos(1, 0),
             };
-            all.push(("next-event".into(), nee.weight(&self.camera_sums(s, 1))));
+            if !self.delta[1] {
+                all.push(("next-event".into(), nee.weight(&self.camera_sums(s, 1))));
+            }
             // Connections v[i - 1] (light) to v[i] (camera).
-            for i in 2..k {
+            for i in (2..k).filter(|&i| !self.delta[i - 1] && !self.delta[i]) {
                 let light = End {
                     partials: self.light_sums(s, i - 1),
                     forward: self.pdf(i - 1, i),
@@ -374,9 +379,11 @@ mod tests {
                 cos: self.cos(k - 1, k),
                 merged: k - 1 > 1,
             };
-            all.push(("light traced".into(), light_traced(&s.pass, &light, camera_area)));
+            if !self.delta[k - 1] {
+                all.push(("light traced".into(), light_traced(&s.pass, &light, camera_area)));
+            }
             // Merging at each inner vertex but the first (direct light is not merged).
-            for i in 2..k {
+            for i in (2..k).filter(|&i| !self.delta[i]) {
                 let w = merging(
                     &s.pass,
                     &self.light_sums(s, i),
@@ -406,11 +413,14 @@ mod tests {
     #[test]
     fn every_techniques_weight_sums_to_one_along_random_paths() {
         let mut rng = Lcg(7);
-        for trial in 0..200 {
+        let mut with_delta = 0;
+        for trial in 0..400 {
             let k = 2 + trial % 6;
             let p: Vec<Vec3> = (0..=k).map(|_| rng.vec()).collect();
             let n: Vec<Vec3> = (0..=k).map(|_| rng.vec().normalize()).collect();
-            let path = Path { p, n };
+            let delta: Vec<bool> = (0..=k).map(|i| i > 0 && i < k && rng.next() < 0.3).collect();
+            with_delta += usize::from(delta.contains(&true));
+            let path = Path { p, n, delta };
             let setup = Setup {
                 pass: PassWeights::new(0.01 + 0.2 * rng.next(), 1000 + (rng.next() * 50000.0) as usize),
                 area: 0.1 + rng.next(),
@@ -423,5 +433,6 @@ mod tests {
             assert!((sum - 1.0).abs() < 1e-3, "path of {k} segments: weights sum to {sum}: {weights:?}");
             assert!(weights.iter().all(|(_, w)| (0.0..=1.0).contains(w)), "{weights:?}");
         }
+        assert!(with_delta > 100, "only {with_delta} paths had a delta vertex");
     }
 }
