@@ -7,34 +7,14 @@ use glam::Vec3;
 use super::light_paths::{joined, LightVertex};
 use super::merge::CameraVertex;
 use super::mis::{connection, DirectWeight, End, PassWeights};
-use super::{finite, kept};
-use crate::geometry::offset_origin;
+use super::{finite, kept, on_its_side, visibility};
 use crate::sampling::PixelSampler;
 use crate::spectrum::SampledSpectrum;
 use crate::sppm::renderer::{PassSamples, PassStats, Renderer};
-use crate::sppm::see_through;
 
-/// Whether light arriving at `camera` from `wi` can leave toward its way back (not through the
-/// surface, unless its BSDF transmits).
+/// Whether light arriving at `camera` from `wi` can leave toward its way back.
 fn reaches(camera: &CameraVertex, wi: Vec3) -> bool {
-    let ng = camera.frame.ng();
-    camera.bsdf.transmits() || ng.dot(wi) * ng.dot(camera.wo) > 0.0
-}
-
-/// How much of the light along the segment from `a` (on a triangle whose largest coordinate is
-/// `scale`, geometric normal `ng`) to `b` reaches it.
-fn visibility(
-    renderer: &Renderer,
-    pass: &PassSamples,
-    (a, ng, scale): (Vec3, Vec3, f32),
-    direction: Vec3,
-    distance: f32,
-    stats: &mut PassStats,
-) -> f32 {
-    stats.shadow_rays += 1;
-    let origin = offset_origin(a, ng, direction, scale);
-    let t_max = if distance.is_finite() { distance * (1.0 - 1e-4) } else { f32::INFINITY };
-    see_through::visibility(renderer, &pass.wavelengths, origin, direction, t_max)
+    on_its_side(camera.bsdf, camera.frame.ng(), camera.wo, wi)
 }
 
 /// Next-event estimation at `camera` (on a triangle whose largest coordinate is `scale`): one

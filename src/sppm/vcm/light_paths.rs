@@ -4,9 +4,9 @@
 
 use glam::{Vec3, Vec3A};
 
-use super::kept;
 use super::mis::{light_traced, End, Partials, PassWeights, Scatter};
 use super::view::View;
+use super::{kept, on_its_side, visibility};
 use crate::geometry::offset_origin;
 use crate::materials::{Bsdf, Lobe, Transport};
 use crate::sampling::Sampler;
@@ -14,7 +14,6 @@ use crate::spectrum::{hero_only, SampledSpectrum, LANES};
 use crate::sppm::media::Media;
 use crate::sppm::photons::photon_stream;
 use crate::sppm::renderer::{PassSamples, PassStats, Renderer, MAX_DEPTH};
-use crate::sppm::see_through;
 
 /// A vertex of a light subpath where its BSDF is not a delta.
 #[derive(Clone, Copy, Debug)]
@@ -50,8 +49,7 @@ impl LightVertex {
     /// Whether light leaving toward `w` stays on a side of the surface the BSDF sends it to (a
     /// shading normal tilted from the geometric one would otherwise leak light through).
     pub fn reaches(&self, w: Vec3) -> bool {
-        let ng = self.lobe.frame.ng();
-        self.lobe.bsdf.transmits() || ng.dot(w) * ng.dot(self.wo) > 0.0
+        on_its_side(&self.lobe.bsdf, self.lobe.frame.ng(), self.wo, w)
     }
 }
 
@@ -242,10 +240,8 @@ fn to_camera(
     let end =
         End { partials: vertex.partials, forward: 0.0, reverse, cos: cos_here, merged: vertex.segments > 1 };
     let weight = light_traced(weights, &end, camera_area);
-    stats.shadow_rays += 1;
-    let origin = offset_origin(vertex.p, vertex.lobe.frame.ng(), toward, vertex.scale);
-    let t_max = landing.distance * (1.0 - 1e-4);
-    let through = see_through::visibility(renderer, &pass.wavelengths, origin, toward, t_max);
+    let at = (vertex.p, vertex.lobe.frame.ng(), vertex.scale);
+    let through = visibility(renderer, pass, at, toward, landing.distance, stats);
     if through <= 0.0 {
         return None;
     }

@@ -29,7 +29,10 @@ use rayon::prelude::*;
 use super::media::Media;
 use super::photons::photon_chunks;
 use super::renderer::{collect_counting, PassSamples, PassStats, PixelEstimate, Renderer};
+use super::see_through;
+use crate::geometry::offset_origin;
 use crate::lights::Light;
+use crate::materials::Bsdf;
 use crate::scene::{media_scatter, Scene};
 use crate::spectrum::{SampledSpectrum, Wavelengths};
 use eye_paths::{trace_camera_path, Lights};
@@ -78,6 +81,29 @@ fn kept(
         .crossed(scene, material, ng, wo, w)
         .transmittance(scene, lambda, length)
         .unwrap_or(SampledSpectrum::ONE)
+}
+
+/// Whether light arriving from `wo` at a surface of geometric normal `ng` can leave toward `w`
+/// by `bsdf`: on `wo`'s side, unless the BSDF transmits (a shading normal tilted from the
+/// geometric one would otherwise leak light through the surface).
+fn on_its_side(bsdf: &Bsdf, ng: Vec3, wo: Vec3, w: Vec3) -> bool {
+    bsdf.transmits() || ng.dot(w) * ng.dot(wo) > 0.0
+}
+
+/// How much of the light along the segment from `a` (on a triangle of geometric normal `ng`
+/// whose largest coordinate is `scale`) along `direction` reaches `distance` (a shadow ray).
+fn visibility(
+    renderer: &Renderer,
+    pass: &PassSamples,
+    (a, ng, scale): (Vec3, Vec3, f32),
+    direction: Vec3,
+    distance: f32,
+    stats: &mut PassStats,
+) -> f32 {
+    stats.shadow_rays += 1;
+    let origin = offset_origin(a, ng, direction, scale);
+    let t_max = if distance.is_finite() { distance * (1.0 - 1e-4) } else { f32::INFINITY };
+    see_through::visibility(renderer, &pass.wavelengths, origin, direction, t_max)
 }
 
 /// One pass's light subpaths: their vertices path after path, where each path's start, and
