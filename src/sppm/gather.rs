@@ -32,7 +32,7 @@ use crate::spectrum::{SampledSpectrum, LANES};
 /// it are gathered; those facing more away lie behind it (the back of a thin wall). Walls meeting
 /// at right angles after a rotation can face each other by +-1e-7, so perpendicular must not be
 /// the boundary between gathered and not.
-const EDGE_COSINE: f32 = 0.5;
+pub(super) const EDGE_COSINE: f32 = 0.5;
 
 /// The biweight kernel of one radius and its Laplacian.
 #[derive(Clone, Copy)]
@@ -52,12 +52,19 @@ impl Kernel {
         Kernel { r2, scale, laplacian_scale: -8.0 * scale / r2 }
     }
 
-    /// The wall through `at` of normal `ng` (a photon's surface, meeting the visible point's at
-    /// an edge) and the kernel mass its plane cuts off the disc around `vp` (in `vp`'s plane).
-    fn wall(&self, ng: Vec3, at: Vec3, vp: &VisiblePoint) -> Wall {
-        let n = vp.frame.ng();
+    /// The kernel mass the open edges `edges` near `p` (on a surface of normal `n`) cut off the
+    /// disc, per axis.
+    pub(super) fn open_edge_cut(&self, edges: &OpenEdges, p: Vec3, n: Vec3) -> Vec3 {
+        let radius = self.r2.sqrt();
+        edges.distances(p, n, radius).map(|d| kernel_mass_beyond(d / radius))
+    }
+
+    /// The wall through `at` of normal `ng` (a photon's surface, meeting the surface of normal
+    /// `n` at an edge) and the kernel mass its plane cuts off the disc around `p` (in that
+    /// surface's plane).
+    pub(super) fn wall(&self, ng: Vec3, at: Vec3, p: Vec3, n: Vec3) -> Wall {
         let sine = (ng - ng.dot(n) * n).length();
-        let height = (vp.p - at).dot(ng);
+        let height = (p - at).dot(ng);
         let mass = if sine < 0.5 { 0.0 } else { kernel_mass_beyond(height.abs() / sine / self.r2.sqrt()) };
         Wall { at, normal: ng, point_side: height, mass }
     }
@@ -66,7 +73,7 @@ impl Kernel {
 /// The plane of a surface meeting a visible point's at an edge (a wall standing on the floor
 /// the point is on), found from a photon on it.
 #[derive(Clone, Copy, Default)]
-struct Wall {
+pub(super) struct Wall {
     /// The photon's position.
     at: Vec3,
     /// Its surface's normal.
@@ -85,6 +92,18 @@ impl Wall {
         } else {
             self
         }
+    }
+
+    /// Keeps `wall` (of a surface of normal `ng`) among `walls` where it cuts more off the disc
+    /// than the one kept before along the same axis.
+    pub(super) fn keep_widest(walls: &mut [Wall; 3], wall: Wall, ng: Vec3) {
+        let axis = ng.abs().max_position();
+        walls[axis] = walls[axis].or_if_cutting_more(wall);
+    }
+
+    /// The kernel mass `walls` cut off, per axis.
+    pub(super) fn cut(walls: &[Wall; 3]) -> Vec3 {
+        Vec3::from(walls.map(|w| w.mass))
     }
 
     /// Whether `p` lies across the plane from the visible point.
@@ -188,9 +207,7 @@ impl PhotonSet {
 
     /// The kernel mass the scene's open edges near `vp` cut off its disc, per axis.
     pub fn edge_cut(&self, vp: &VisiblePoint) -> Vec3 {
-        let radius = self.kernel.r2.sqrt();
-        let edges = self.open_edges.distances(vp.p, vp.frame.ng(), radius);
-        edges.map(|d| kernel_mass_beyond(d / radius))
+        self.kernel.open_edge_cut(&self.open_edges, vp.p, vp.frame.ng())
     }
 
     /// [`PhotonSet::estimate`] with the open edges' cut given by `edge_cut` (asked only where
@@ -278,7 +295,7 @@ impl Positions {
         positions
     }
 
-    fn at(&self, i: usize) -> Vec3 {
+    pub(super) fn at(&self, i: usize) -> Vec3 {
         Vec3::new(self.x[i], self.y[i], self.z[i])
     }
 
@@ -401,11 +418,10 @@ impl<'a> Weigher<'a> {
     /// Adds a photon at `at` on a wall: its wall, where that cuts more off the disc than the walls
     /// found before with normals along the same axis.
     fn add_wall(&mut self, photon: &Arrival, at: Vec3) {
-        let wall = self.kernel.wall(photon.ng, at, self.vp);
+        let wall = self.kernel.wall(photon.ng, at, self.vp.p, self.vp.frame.ng());
         let rises_above_point = (at - self.vp.p).dot(self.front) > 0.0;
         self.behind_a_wall |= wall.mass > 0.0 && wall.point_side < 0.0 && rises_above_point;
-        let axis = photon.ng.abs().max_position();
-        self.walls[axis] = self.walls[axis].or_if_cutting_more(wall);
+        Wall::keep_widest(&mut self.walls, wall, photon.ng);
     }
 
     fn finish(self) -> PhotonSums {
@@ -413,7 +429,7 @@ impl<'a> Weigher<'a> {
         PhotonSums {
             kernel: self.flux_kernel * bsdf * self.kernel.scale,
             laplacian: self.flux_laplacian * bsdf * self.kernel.laplacian_scale,
-            cut: Vec3::from(self.walls.map(|w| w.mass)),
+            cut: Wall::cut(&self.walls),
         }
     }
 }
@@ -454,7 +470,7 @@ const LEAST_MASS_WITHIN: f32 = 0.25;
 impl PhotonSums {
     /// The kernel mass within the surface.
     fn kernel_mass_within(&self) -> f32 {
-        (1.0 - self.cut.element_sum()).max(LEAST_MASS_WITHIN)
+        kernel_mass_within(self.cut)
     }
 }
 
@@ -467,6 +483,11 @@ impl std::ops::Add for PhotonSums {
             cut: self.cut.max(o.cut),
         }
     }
+}
+
+/// The kernel mass left within a surface whose edges cut `cut` off the disc, per axis.
+pub(super) fn kernel_mass_within(cut: Vec3) -> f32 {
+    (1.0 - cut.element_sum()).max(LEAST_MASS_WITHIN)
 }
 
 /// The biweight kernel's mass beyond a line at distance `s` radii from its centre:

@@ -20,9 +20,23 @@ def frosted_glass_scene():
     make_scenes.cornell_glass_scene(roughness=0.2)
 
 
+def glossy_interior_scene():
+    """The diffuse box with its blocks in rough metal, the tall one gold (roughness 0.3) and the
+    short one aluminium (roughness 0.15): an interior of diffuse and glossy light without glass."""
+    make_scenes.cornell_diffuse_scene()
+    for name, colour, roughness in (("TallBlock", (1.0, 0.77, 0.34), 0.3), ("ShortBlock", (0.91, 0.92, 0.92), 0.15)):
+        metal = make_scenes.material(f"{name} metal", colour, roughness=roughness)
+        metal.node_tree.nodes["Principled BSDF"].inputs["Metallic"].default_value = 1.0
+        block = bpy.data.objects[name]
+        block.data.materials.clear()
+        block.data.materials.append(metal)
+
+
 SCENES = {
     "caustic": make_scenes.cornell_glass_scene,
     "diffuse": make_scenes.cornell_diffuse_scene,
+    # The diffuse box with rough metal blocks (gold and aluminium): diffuse and glossy light.
+    "glossy_interior": glossy_interior_scene,
     "spot": make_scenes.spot_glass_scene,
     # A spot light through a glass ball into fog: the volumetric caustic (media).
     "fog_spot": make_scenes.fog_spot_scene,

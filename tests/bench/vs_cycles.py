@@ -58,12 +58,14 @@ def cpu_seconds(who):
     return usage.ru_utime + usage.ru_stime
 
 
-def render_cycles(scene, seconds, threads, path):
-    """Cycles for `seconds` of rendering wall time; gives (wall s, CPU s) of the whole call."""
+def render_cycles(scene, seconds, threads, path, samples=1 << 24, seed=0):
+    """Cycles for `seconds` of rendering wall time (0: no limit) or `samples`, whichever ends
+    first; gives (wall s, CPU s) of the whole call."""
     scene.render.engine = 'CYCLES'
     cycles = scene.cycles
     cycles.device = 'CPU'
-    cycles.samples = 1 << 24
+    cycles.samples = samples
+    cycles.seed = seed
     cycles.time_limit = seconds
     cycles.use_adaptive_sampling = False
     cycles.use_denoising = False

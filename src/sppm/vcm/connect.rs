@@ -57,7 +57,10 @@ pub fn direct_light(
         cos_light: density.cos,
         cos_here,
     };
-    let weight = mis.weight(&camera.partials);
+    let weight = match camera.segments {
+        1 => mis.weight(&camera.partials.without_light_tracing()),
+        _ => mis.weight(&camera.partials),
+    };
     let through =
         visibility(renderer, pass, (camera.p, camera.frame.ng(), scale), sample.wi, sample.distance, stats);
     if through <= 0.0 {

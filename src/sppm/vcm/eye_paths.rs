@@ -156,6 +156,9 @@ pub fn trace_camera_path(
             delta: sample.is_delta,
         };
         partials = partials.scattered(weights, scatter, true);
+        if segments == 1 {
+            partials = partials.past_first_camera_vertex();
+        }
         if !state.hero_only && material.separates_wavelengths(&bsdf) {
             state.beta = hero_only(state.beta);
             state.hero_only = true;

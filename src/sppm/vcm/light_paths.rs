@@ -150,8 +150,11 @@ pub fn trace_light_path(
                 scale: surface.scale,
                 media: (walk.media, surface.material),
             };
-            if let Some(splat) = to_camera(renderer, pass, weights, view, &vertex, &mut stats) {
-                splats.push(splat);
+            // Direct light is not light traced (see `mis.rs`).
+            if walk.segments > 1 {
+                if let Some(splat) = to_camera(renderer, pass, weights, view, &vertex, &mut stats) {
+                    splats.push(splat);
+                }
             }
             vertices.push(vertex);
         }

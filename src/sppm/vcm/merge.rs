@@ -1,21 +1,21 @@
 //! Light vertices bucketed for merging at camera vertices within the pass radius, weighed by the
-//! gather's biweight kernel (its Laplacian too, for the error bound's bias term).
+//! gather's biweight kernel (its Laplacian too, for the error bound's bias term). Where the disc
+//! reaches past the end of the camera vertex's surface (a room's corners, a table's edge), the sum
+//! is divided by the kernel mass left on the surface, as the gather divides it: the ends are found
+//! from light vertices on surfaces meeting the camera vertex's, and from the scene's open edges.
 
 use glam::Vec3;
 use std::f32::consts::FRAC_1_PI;
+use std::sync::Arc;
 
 use super::light_paths::{joined, LightVertex};
 use super::mis::{merging, Partials, PassWeights};
 use crate::materials::{Bsdf, ShadingFrame};
+use crate::scene::OpenEdges;
 use crate::spectrum::SampledSpectrum;
-use crate::sppm::gather::{Kernel, Positions};
+use crate::sppm::gather::{kernel_mass_within, Kernel, Positions, Wall, EDGE_COSINE};
 use crate::sppm::grid::PhotonGrid;
 use crate::sppm::media::Media;
-
-/// Light vertices on surfaces facing more away than this (in cosine of their geometric normals)
-/// from a camera vertex's are not merged there: they lie on another surface (a wall meeting the
-/// floor) or the other face of a thin one.
-const FACING_COSINE: f32 = 0.5;
 
 /// What merging reads of a light vertex within reach, besides its position.
 #[derive(Clone, Copy, Debug)]
@@ -35,6 +35,7 @@ pub struct MergeSet {
     positions: Positions,
     grid: PhotonGrid,
     kernel: Kernel,
+    open_edges: Arc<OpenEdges>,
 }
 
 /// A camera vertex merging: where it is, its lobe, its way back, its sums and path so far.
@@ -62,8 +63,9 @@ pub struct CameraVertex<'a> {
 
 impl MergeSet {
     /// The light vertices of `vertices` for merging within `radius`: those a segment or more past
-    /// their light's first vertex (direct light is not merged).
-    pub fn new(vertices: &[LightVertex], radius: f32) -> Self {
+    /// their light's first vertex (direct light is not merged), in a scene whose surfaces end at
+    /// `open_edges`.
+    pub fn new(vertices: &[LightVertex], radius: f32, open_edges: &Arc<OpenEdges>) -> Self {
         let vertices: Vec<&LightVertex> = vertices.iter().filter(|v| v.segments > 1).collect();
         let positions: Vec<Vec3> = vertices.iter().map(|v| v.p).collect();
         let (grid, order) = PhotonGrid::build(&positions, radius);
@@ -83,11 +85,14 @@ impl MergeSet {
             })
             .collect();
         let positions = Positions::new(order.iter().map(|&i| positions[i as usize]));
-        MergeSet { sorted, positions, grid, kernel: Kernel::new(radius) }
+        MergeSet { sorted, positions, grid, kernel: Kernel::new(radius), open_edges: Arc::clone(open_edges) }
     }
 
     /// The weighted radiance merging finds at `camera` (times its throughput), and the same with
-    /// the kernel's Laplacian, for paths of at most `max_segments`.
+    /// the kernel's Laplacian, for paths of at most `max_segments`. Light vertices on surfaces
+    /// facing more away than the gather's `EDGE_COSINE` are not merged: they lie on a surface
+    /// meeting the camera vertex's at an edge (a wall, seen from the floor), whose plane cuts
+    /// the disc, or on the other face of a thin one.
     pub fn merge(
         &self,
         weights: &PassWeights,
@@ -99,10 +104,19 @@ impl MergeSet {
         let front = if ng.dot(camera.wo) < 0.0 { -ng } else { ng };
         let shading = Shading::of(camera);
         let r2 = self.kernel.r2;
+        let mut walls = [Wall::default(); 3];
         self.grid.for_each_near(camera.p, |range| {
             self.positions.for_each_within(range, camera.p, r2, |i, d2| {
                 let light = &self.sorted[i];
-                if light.segments + camera.segments > max_segments || light.ng.dot(front) < FACING_COSINE {
+                let facing = light.ng.dot(front);
+                if facing < EDGE_COSINE {
+                    if facing > -EDGE_COSINE {
+                        let wall = self.kernel.wall(light.ng, self.positions.at(i), camera.p, ng);
+                        Wall::keep_widest(&mut walls, wall, light.ng);
+                    }
+                    return;
+                }
+                if light.segments + camera.segments > max_segments {
                     return;
                 }
                 let Some((f, forward, reverse)) = shading.toward(camera, light.wi) else { return };
@@ -118,6 +132,10 @@ impl MergeSet {
             });
         });
         let per_path = 1.0 / weights.light_paths;
+        if sum != SampledSpectrum::ZERO {
+            let cut = Wall::cut(&walls).max(self.kernel.open_edge_cut(&self.open_edges, camera.p, ng));
+            sum /= kernel_mass_within(cut);
+        }
         (sum * (self.kernel.scale * per_path), laplacian * (self.kernel.laplacian_scale * per_path))
     }
 }

@@ -124,7 +124,7 @@ impl Renderer<'_> {
         let weights = PassWeights::new(pass.radius, paths);
         let view = View::new(self.scene.camera, self.settings.crop);
         let light = self.trace_light_subpaths(pass, &weights, &view);
-        let merge_set = MergeSet::new(&light.vertices, pass.radius);
+        let merge_set = MergeSet::new(&light.vertices, pass.radius, &self.scene.open_edges);
         let lights = Lights { vertices: &light.vertices, starts: &light.starts, merge_set: &merge_set };
         let pixels = (self.settings.width * self.settings.height) as usize;
         let (mut estimates, stats) = collect_counting(pixels, |pixel| {
