@@ -212,6 +212,13 @@ impl Bsdf {
         matches!(self, Bsdf::RoughDielectric { .. } | Bsdf::RoughThinDielectric { .. } | Bsdf::Medium { .. })
     }
 
+    /// Whether light arriving from `wo` at a surface of geometric normal `ng` can leave toward
+    /// `w`: on `wo`'s side, unless it transmits (a shading normal tilted from the geometric one
+    /// would otherwise leak light through the surface).
+    pub fn leaves_toward(&self, ng: Vec3, wo: Vec3, w: Vec3) -> bool {
+        self.transmits() || ng.dot(w) * ng.dot(wo) > 0.0
+    }
+
     /// Whether [`Bsdf::sample`] reads its `u_lobe` (a dielectric's choice between reflection and
     /// refraction); paths draw that number only then.
     fn picks_lobe(&self) -> bool {

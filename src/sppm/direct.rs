@@ -95,7 +95,7 @@ impl DirectLight<'_> {
             return DirectTerm::ZERO;
         };
         let (n, ng) = (point.frame.n(), point.frame.ng());
-        if !point.bsdf.transmits() && ng.dot(sample.wi) * ng.dot(point.wo) <= 0.0 {
+        if !point.bsdf.leaves_toward(ng, point.wo, sample.wi) {
             return DirectTerm::ZERO;
         }
         let f = point.bsdf.eval(point.frame, point.wo, sample.wi);
@@ -130,8 +130,7 @@ impl DirectLight<'_> {
         let Some(sample) = point.bsdf.sample(point.frame, point.wo, u, u_lobe, Transport::Radiance) else {
             return DirectTerm::ZERO;
         };
-        let crosses = point.frame.ng().dot(sample.wi) * point.frame.ng().dot(point.wo) <= 0.0;
-        if sample.pdf <= 0.0 || (crosses && !point.bsdf.transmits()) {
+        if sample.pdf <= 0.0 || !point.bsdf.leaves_toward(point.frame.ng(), point.wo, sample.wi) {
             return DirectTerm::ZERO;
         }
         stats.shadow_rays += 1;

@@ -7,14 +7,14 @@ use glam::Vec3;
 use super::light_paths::{joined, LightVertex};
 use super::merge::CameraVertex;
 use super::mis::{connection, DirectWeight, End, PassWeights};
-use super::{finite, kept, on_its_side, visibility};
+use super::{finite, kept, visibility};
 use crate::sampling::PixelSampler;
 use crate::spectrum::SampledSpectrum;
 use crate::sppm::renderer::{PassSamples, PassStats, Renderer};
 
 /// Whether light arriving at `camera` from `wi` can leave toward its way back.
 fn reaches(camera: &CameraVertex, wi: Vec3) -> bool {
-    on_its_side(camera.bsdf, camera.frame.ng(), camera.wo, wi)
+    camera.bsdf.leaves_toward(camera.frame.ng(), camera.wo, wi)
 }
 
 /// Next-event estimation at `camera` (on a triangle whose largest coordinate is `scale`): one

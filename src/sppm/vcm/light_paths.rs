@@ -6,7 +6,7 @@ use glam::{Vec3, Vec3A};
 
 use super::mis::{light_traced, End, Partials, PassWeights, Scatter};
 use super::view::View;
-use super::{kept, on_its_side, visibility};
+use super::{kept, visibility};
 use crate::geometry::offset_origin;
 use crate::materials::{Bsdf, Lobe, Transport};
 use crate::sampling::Sampler;
@@ -49,7 +49,7 @@ impl LightVertex {
     /// Whether light leaving toward `w` stays on a side of the surface the BSDF sends it to (a
     /// shading normal tilted from the geometric one would otherwise leak light through).
     pub fn reaches(&self, w: Vec3) -> bool {
-        on_its_side(&self.lobe.bsdf, self.lobe.frame.ng(), self.wo, w)
+        self.lobe.bsdf.leaves_toward(self.lobe.frame.ng(), self.wo, w)
     }
 }
 

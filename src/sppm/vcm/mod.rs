@@ -32,7 +32,6 @@ use super::renderer::{collect_counting, PassSamples, PassStats, PixelEstimate, R
 use super::see_through;
 use crate::geometry::offset_origin;
 use crate::lights::Light;
-use crate::materials::Bsdf;
 use crate::scene::{media_scatter, Scene};
 use crate::spectrum::{SampledSpectrum, Wavelengths};
 use eye_paths::{trace_camera_path, Lights};
@@ -81,13 +80,6 @@ fn kept(
         .crossed(scene, material, ng, wo, w)
         .transmittance(scene, lambda, length)
         .unwrap_or(SampledSpectrum::ONE)
-}
-
-/// Whether light arriving from `wo` at a surface of geometric normal `ng` can leave toward `w`
-/// by `bsdf`: on `wo`'s side, unless the BSDF transmits (a shading normal tilted from the
-/// geometric one would otherwise leak light through the surface).
-fn on_its_side(bsdf: &Bsdf, ng: Vec3, wo: Vec3, w: Vec3) -> bool {
-    bsdf.transmits() || ng.dot(w) * ng.dot(wo) > 0.0
 }
 
 /// How much of the light along the segment from `a` (on a triangle of geometric normal `ng`
