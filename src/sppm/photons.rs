@@ -76,6 +76,11 @@ pub fn photon_chunks(
     (0..(end - start).div_ceil(CHUNK)).into_par_iter().map(chunk_paths)
 }
 
+/// The chunk of [`photon_chunks`] (from path 0) that holds path `k`, and `k`'s place in it.
+pub fn chunk_of(k: usize) -> (usize, usize) {
+    (k / CHUNK, k % CHUNK)
+}
+
 /// Photon path `k` of `pass` as it leaves its light, and the index of that light; `None` when no
 /// light emits at the pass's wavelengths.
 pub fn start_photon(renderer: &Renderer, pass: &PassSamples, k: u64) -> Option<(PhotonState, usize)> {

@@ -11,10 +11,14 @@ use super::light_paths::LightVertex;
 use super::merge::{CameraVertex, MergeSet};
 use super::mis::{emitter_met, Partials, PassWeights, Scatter};
 use super::view::View;
+use super::LightSubpaths;
 use crate::geometry::offset_origin;
 use crate::materials::Transport;
 use crate::scene::NOT_A_LIGHT;
 use crate::spectrum::{hero_only, SampledSpectrum, LANES};
+use crate::sppm::photons::chunk_of;
+#[cfg(doc)]
+use crate::sppm::photons::photon_chunks;
 use crate::sppm::renderer::{PassSamples, PassStats, PixelEstimate, Renderer, MAX_DEPTH};
 use crate::sppm::visible::{start_eye_path, Meeting};
 
@@ -23,10 +27,10 @@ const ROULETTE_AFTER: u32 = 3;
 
 /// What a pass's camera paths meet light subpaths with.
 pub struct Lights<'a> {
-    /// Every light path's vertices, path after path.
-    pub vertices: &'a [LightVertex],
-    /// Where each light path's vertices start in `vertices` (and one past the last).
-    pub starts: &'a [usize],
+    /// The light paths, in the chunks they were traced in (see [`photon_chunks`]).
+    pub chunks: &'a [LightSubpaths],
+    /// Light paths in all.
+    pub paths: usize,
     /// The light vertices for merging.
     pub merge_set: &'a MergeSet,
 }
@@ -34,12 +38,11 @@ pub struct Lights<'a> {
 impl Lights<'_> {
     /// The light path paired with film pixel `pixel`.
     fn path_of(&self, pixel: usize) -> &[LightVertex] {
-        let paths = self.starts.len() - 1;
-        if paths == 0 {
+        if self.paths == 0 {
             return &[];
         }
-        let k = pixel % paths;
-        &self.vertices[self.starts[k]..self.starts[k + 1]]
+        let (chunk, k) = chunk_of(pixel % self.paths);
+        self.chunks[chunk].path(k)
     }
 }
 

@@ -65,8 +65,12 @@ impl MergeSet {
     /// The light vertices of `vertices` for merging within `radius`: those a segment or more past
     /// their light's first vertex (direct light is not merged), in a scene whose surfaces end at
     /// `open_edges`.
-    pub fn new(vertices: &[LightVertex], radius: f32, open_edges: &Arc<OpenEdges>) -> Self {
-        let vertices: Vec<&LightVertex> = vertices.iter().filter(|v| v.segments > 1).collect();
+    pub fn new<'a>(
+        vertices: impl Iterator<Item = &'a LightVertex>,
+        radius: f32,
+        open_edges: &Arc<OpenEdges>,
+    ) -> Self {
+        let vertices: Vec<&LightVertex> = vertices.filter(|v| v.segments > 1).collect();
         let positions: Vec<Vec3> = vertices.iter().map(|v| v.p).collect();
         let (grid, order) = PhotonGrid::build(&positions, radius);
         let sorted = order

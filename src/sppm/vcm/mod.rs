@@ -98,14 +98,21 @@ fn visibility(
     see_through::visibility(renderer, &pass.wavelengths, origin, direction, t_max)
 }
 
-/// One pass's light subpaths: their vertices path after path, where each path's start, and
-/// their light tracing contributions.
+/// One chunk of a pass's light subpaths: their vertices path after path, where each path's
+/// vertices start (and one past the last), and their light tracing contributions.
 #[derive(Default)]
-struct LightSubpaths {
+pub struct LightSubpaths {
     vertices: Vec<LightVertex>,
     starts: Vec<usize>,
     splats: Vec<Splat>,
     stats: PassStats,
+}
+
+impl LightSubpaths {
+    /// The vertices of the chunk's path `k`.
+    pub fn path(&self, k: usize) -> &[LightVertex] {
+        &self.vertices[self.starts[k]..self.starts[k + 1]]
+    }
 }
 
 impl Renderer<'_> {
@@ -115,24 +122,34 @@ impl Renderer<'_> {
         let paths = self.settings.photons_per_pass;
         let weights = PassWeights::new(pass.radius, paths);
         let view = View::new(self.scene.camera, self.settings.crop);
-        let light = self.trace_light_subpaths(pass, &weights, &view);
-        let merge_set = MergeSet::new(&light.vertices, pass.radius, &self.scene.open_edges);
-        let lights = Lights { vertices: &light.vertices, starts: &light.starts, merge_set: &merge_set };
+        let chunks = self.trace_light_subpaths(pass, &weights, &view);
+        let vertices = chunks.iter().flat_map(|chunk| &chunk.vertices);
+        let merge_set = MergeSet::new(vertices, pass.radius, &self.scene.open_edges);
+        let lights = Lights { chunks: &chunks, paths, merge_set: &merge_set };
         let pixels = (self.settings.width * self.settings.height) as usize;
         let (mut estimates, stats) = collect_counting(pixels, |pixel| {
             trace_camera_path(self, pass, (&weights, &view), &lights, pixel)
         });
-        for &(pixel, radiance) in &light.splats {
+        for &(pixel, radiance) in chunks.iter().flat_map(|chunk| &chunk.splats) {
             estimates[pixel as usize].radiance += radiance;
         }
-        (estimates, stats + light.stats)
+        (estimates, chunks.iter().fold(stats, |all, chunk| all + chunk.stats))
     }
 
-    /// The pass's light subpaths, traced in parallel chunks and joined in path order.
-    fn trace_light_subpaths(&self, pass: &PassSamples, weights: &PassWeights, view: &View) -> LightSubpaths {
-        let chunks: Vec<LightSubpaths> = photon_chunks(0..self.settings.photons_per_pass)
+    /// The pass's light subpaths, traced in parallel chunks, in path order (kept in their
+    /// chunks: joining them would copy every vertex once more).
+    fn trace_light_subpaths(
+        &self,
+        pass: &PassSamples,
+        weights: &PassWeights,
+        view: &View,
+    ) -> Vec<LightSubpaths> {
+        photon_chunks(0..self.settings.photons_per_pass)
             .map(|range| {
-                let mut chunk = LightSubpaths::default();
+                let mut chunk = LightSubpaths {
+                    vertices: Vec::with_capacity(2 * (range.end - range.start) as usize),
+                    ..LightSubpaths::default()
+                };
                 for k in range {
                     chunk.starts.push(chunk.vertices.len());
                     let stats = trace_light_path(
@@ -146,18 +163,9 @@ impl Renderer<'_> {
                     );
                     chunk.stats = chunk.stats + stats;
                 }
+                chunk.starts.push(chunk.vertices.len());
                 chunk
             })
-            .collect();
-        let mut all = LightSubpaths::default();
-        for chunk in chunks {
-            let offset = all.vertices.len();
-            all.starts.extend(chunk.starts.iter().map(|s| s + offset));
-            all.vertices.extend(chunk.vertices);
-            all.splats.extend(chunk.splats);
-            all.stats = all.stats + chunk.stats;
-        }
-        all.starts.push(all.vertices.len());
-        all
+            .collect()
     }
 }
