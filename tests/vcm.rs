@@ -65,6 +65,19 @@ fn vcm_lights_the_ground_as_each_light_says() {
     }
 }
 
+/// The diffuse box rendered by VCM at 64x48 for `passes` passes of first radius `radius`, and its
+/// converged reference (`tests/bench/diffuse.exr`, 256x192).
+fn vcm_diffuse_box(passes: u64, radius: f64) -> (Image, Image) {
+    let dir = tempfile::tempdir().unwrap();
+    let mut s = settings(&bundled_scene("cornell_diffuse.gltf"), dir.path(), passes);
+    s.resolution = Some([64, 48]);
+    s.radius = Some(radius);
+    s.method = Method::Vcm;
+    let reference =
+        read_exr(&std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("tests/bench/diffuse.exr"));
+    (render(&s, 2), reference)
+}
+
 /// The diffuse box with a merging radius too small to merge anything: what is left is
 /// bidirectional path tracing, which is unbiased, so the image must match the converged
 /// reference (`tests/bench/diffuse.exr`, 256x192, averaged down 4x4) at 64x48: the mean within
@@ -72,14 +85,7 @@ fn vcm_lights_the_ground_as_each_light_says() {
 /// seeds).
 #[test]
 fn vcm_without_merging_converges_to_the_diffuse_box_reference() {
-    let dir = tempfile::tempdir().unwrap();
-    let mut s = settings(&bundled_scene("cornell_diffuse.gltf"), dir.path(), 64);
-    s.resolution = Some([64, 48]);
-    s.radius = Some(0.0005);
-    s.method = Method::Vcm;
-    let image = render(&s, 2);
-    let reference =
-        read_exr(&std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("tests/bench/diffuse.exr"));
+    let (image, reference) = vcm_diffuse_box(64, 0.0005);
     let reference_luminance =
         |x0: usize, x1: usize, y0: usize, y1: usize| reference.luminance(x0 * 4, x1 * 4, y0 * 4, y1 * 4);
     let (mean, expected) = (image.luminance(0, 64, 0, 48), reference_luminance(0, 64, 0, 48));
@@ -107,14 +113,7 @@ fn vcm_without_merging_converges_to_the_diffuse_box_reference() {
 /// +6.5%; without the division, mean -3.9%, the blocks along the floor's edges -16%).
 #[test]
 fn vcm_merging_keeps_the_diffuse_box_corners_bright() {
-    let dir = tempfile::tempdir().unwrap();
-    let mut s = settings(&bundled_scene("cornell_diffuse.gltf"), dir.path(), 32);
-    s.resolution = Some([64, 48]);
-    s.radius = Some(0.25);
-    s.method = Method::Vcm;
-    let image = render(&s, 2);
-    let reference =
-        read_exr(&std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("tests/bench/diffuse.exr"));
+    let (image, reference) = vcm_diffuse_box(32, 0.25);
     let mut ratios = Vec::new();
     for by in 0..6 {
         for bx in 0..8 {

@@ -295,15 +295,20 @@ def parse_resolution(text):
     return width, height
 
 
-def main():
-    parser = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
-    parser.add_argument("--budgets", default="10,30,100,300",
+def add_common_arguments(parser, budgets, scenes, out):
+    """The options every equal-time benchmark takes, with its own defaults."""
+    parser.add_argument("--budgets", default=budgets,
                         type=lambda s: [float(v) for v in s.split(",")], help="CPU seconds")
     parser.add_argument("--threads", type=int, default=2)
     parser.add_argument("--resolution", type=parse_resolution, default=(256, 192))
-    parser.add_argument("--scenes", default="caustic,diffuse,spot", type=lambda s: s.split(","))
-    parser.add_argument("-o", "--out", type=pathlib.Path, default=ROOT / "bench-out")
+    parser.add_argument("--scenes", default=scenes, type=lambda s: s.split(","))
+    parser.add_argument("-o", "--out", type=pathlib.Path, default=ROOT / out)
     parser.add_argument("--binary", default=str(ROOT / "target" / "release" / "caustic"))
+
+
+def main():
+    parser = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
+    add_common_arguments(parser, "10,30,100,300", "caustic,diffuse,spot", "bench-out")
     parser.add_argument("--caustic-flags", default="", help="more flags for caustic render, e.g. '--radius 0.07'")
     parser.add_argument("--make-reference", type=int, metavar="PASSES",
                         help="instead, render the scenes' references with this many passes")

@@ -49,7 +49,7 @@ import numpy as np  # noqa: E402
 import OpenEXR  # noqa: E402
 
 from blender_scenes import SCENES, build, export  # noqa: E402  (imports bpy)
-from vs_cycles import (BENCH_SEED, cpu_seconds, error_at, caustic_curve, fmt, parse_resolution,  # noqa: E402
+from vs_cycles import (BENCH_SEED, add_common_arguments, cpu_seconds, error_at, caustic_curve, fmt,  # noqa: E402
                        reference_floor, relative_mse, render_caustic, render_cycles)
 
 METHODS = ("sppm", "vcm")
@@ -215,14 +215,8 @@ def chart(results, path):
 
 def main():
     parser = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
-    parser.add_argument("--budgets", default="10,30,100,300,600",
-                        type=lambda s: [float(v) for v in s.split(",")], help="CPU seconds")
-    parser.add_argument("--threads", type=int, default=2)
-    parser.add_argument("--resolution", type=parse_resolution, default=(256, 192))
-    parser.add_argument("--scenes", default="caustic,glossy_interior", type=lambda s: s.split(","))
+    add_common_arguments(parser, "10,30,100,300,600", "caustic,glossy_interior", "bench-peers")
     parser.add_argument("--peers", default="mitsuba,cycles", type=lambda s: [p for p in s.split(",") if p])
-    parser.add_argument("-o", "--out", type=pathlib.Path, default=ROOT / "bench-peers")
-    parser.add_argument("--binary", default=str(ROOT / "target" / "release" / "caustic"))
     args = parser.parse_args()
     unknown = [s for s in args.scenes if s not in SCENES] + [p for p in args.peers if p not in ("mitsuba", "cycles")]
     if unknown:
