@@ -150,11 +150,8 @@ pub fn trace_light_path(
                 scale: surface.scale,
                 media: (walk.media, surface.material),
             };
-            // Direct light is not light traced (see `mis.rs`).
-            if walk.segments > 1 {
-                if let Some(splat) = to_camera(renderer, pass, weights, view, &vertex, &mut stats) {
-                    splats.push(splat);
-                }
+            if let Some(splat) = to_camera(renderer, pass, weights, view, &vertex, &mut stats) {
+                splats.push(splat);
             }
             vertices.push(vertex);
         }
@@ -218,7 +215,8 @@ fn start(renderer: &Renderer, pass: &PassSamples, weights: &PassWeights, k: u64)
     })
 }
 
-/// Light tracing: `vertex` seen by the camera, if it is, and its weighted radiance on the pixel.
+/// Light tracing: `vertex` seen by the camera, if it is and is not its light path's first, and
+/// its weighted radiance on the pixel.
 fn to_camera(
     renderer: &Renderer,
     pass: &PassSamples,
@@ -227,6 +225,11 @@ fn to_camera(
     vertex: &LightVertex,
     stats: &mut PassStats,
 ) -> Option<Splat> {
+    // Direct light is not light traced (see `mis.rs`): only vertices past the first, where
+    // merging is a technique.
+    if vertex.segments == 1 {
+        return None;
+    }
     let landing = view.landing(vertex.p)?;
     let toward = landing.toward;
     if !vertex.reaches(toward) {
@@ -240,8 +243,7 @@ fn to_camera(
     // The camera's density of the vertex per area, in pixels.
     let camera_area = landing.pdf * cos_here / (landing.distance * landing.distance);
     let reverse = vertex.lobe.bsdf.pdf(vertex.lobe.frame, toward, vertex.wo);
-    let end =
-        End { partials: vertex.partials, forward: 0.0, reverse, cos: cos_here, merged: vertex.segments > 1 };
+    let end = End { partials: vertex.partials, forward: 0.0, reverse, cos: cos_here, merged: true };
     let weight = light_traced(weights, &end, camera_area);
     let at = (vertex.p, vertex.lobe.frame.ng(), vertex.scale);
     let through = visibility(renderer, pass, at, toward, landing.distance, stats);
