@@ -66,7 +66,8 @@ fn vcm_lights_the_ground_as_each_light_says() {
 }
 
 /// The diffuse box rendered by VCM at 64x48 for `passes` passes of first radius `radius`, and its
-/// converged reference (`tests/bench/diffuse.exr`, 256x192).
+/// converged reference (`tests/bench/diffuse.exr`, 256x192: bidirectional path tracing, 16,384
+/// passes, whose mean is within 0.02% of the 32,768-pass SPPM reference it replaced).
 fn vcm_diffuse_box(passes: u64, radius: f64) -> (Image, Image) {
     let dir = tempfile::tempdir().unwrap();
     let mut s = settings(&bundled_scene("cornell_diffuse.gltf"), dir.path(), passes);

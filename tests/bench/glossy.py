@@ -1,12 +1,13 @@
 """The glossy benchmark (a benchmark, not a test: run it by hand on an idle machine, release build
 first): a studio scene, a gold sphere of roughness 0.3 and a glass ball on a floor under an area
 light, built in bpy and exported by the add-on; the gold sphere's relative MSE at equal CPU time,
-Caustic against Cycles, and Caustic against another Caustic binary (the build before a change):
+Caustic (each `--method` asked for) against Cycles, and against another Caustic binary (the build
+before a change):
 
     cargo build --release
     target/bpy-venv/bin/python tests/bench/glossy.py [--budgets 10,60] [--threads 2]
         [--reference-seconds 600] [--baseline path/to/caustic] [--resolution 96x72]
-        [--gold-roughness 0.3] [-o OUT]
+        [--gold-roughness 0.3] [--methods sppm,vcm] [-o OUT]
 
 Budgets are CPU seconds (threads x wall time; both renderers get the same threads). Cycles: CPU
 device, denoising and adaptive sampling off, a 1-pixel box filter, no glossy filter, 32 bounces.
@@ -81,11 +82,11 @@ def cycles(scene, seconds, threads, path, seed):
     return cpu_seconds(resource.RUSAGE_SELF) - cpu
 
 
-def caustic(binary, gltf, seconds, threads, out, seed):
-    """`caustic render` for `seconds` of wall time; gives the CPU seconds it used."""
+def caustic(binary, method, gltf, seconds, threads, out, seed):
+    """`caustic render --method method` for `seconds` of wall time; gives the CPU seconds it used."""
     cpu = cpu_seconds(resource.RUSAGE_CHILDREN)
     subprocess.run([binary, "render", str(gltf), "-o", str(out), "--progress", "none", "--time-budget", str(seconds),
-                    "--threads", str(threads), "--seed", str(seed)], check=True)
+                    "--threads", str(threads), "--seed", str(seed), "--method", method], check=True)
     return cpu_seconds(resource.RUSAGE_CHILDREN) - cpu
 
 
@@ -118,6 +119,8 @@ def main():
     parser.add_argument("--binary", default=str(ROOT / "target" / "release" / "caustic"))
     parser.add_argument("--resolution", default="96x72")
     parser.add_argument("--gold-roughness", type=float, default=0.3)
+    parser.add_argument("--methods", default="sppm,vcm", type=lambda s: s.split(","),
+                        help="Caustic's methods to measure, each against its own reference")
     parser.add_argument("-o", "--out", default="bench-glossy")
     args = parser.parse_args()
     out = pathlib.Path(args.out).resolve()
@@ -127,15 +130,16 @@ def main():
     scene = studio(resolution, args.gold_roughness)
     gltf = out / "studio.gltf"
     sys.modules["caustic.export"].export(scene, gltf)
-    binaries = {"caustic": args.binary} | ({"baseline": args.baseline} if args.baseline else {})
+    binaries = {f"caustic_{method}": (args.binary, method) for method in args.methods}
+    binaries |= {"baseline": (args.baseline, args.methods[0])} if args.baseline else {}
     references = {"cycles": out / "cycles_reference.exr"}
     references |= {name: out / f"{name}_reference" / "frame_0001.exr" for name in binaries}
     wall = args.reference_seconds
     if not references["cycles"].exists():
         cycles(scene, wall, args.threads, references["cycles"], seed=777)
-    for name, binary in binaries.items():
+    for name, (binary, method) in binaries.items():
         if not references[name].exists():
-            caustic(binary, gltf, wall, args.threads, references[name].parent, seed=777)
+            caustic(binary, method, gltf, wall, args.threads, references[name].parent, seed=777)
     mask = gold_mask(references["cycles"])
     results = {"pixels": int(mask.sum()), "resolution": list(resolution), "threads": args.threads,
                "gold_roughness": args.gold_roughness,
@@ -143,8 +147,8 @@ def main():
     for budget in (float(b) for b in args.budgets.split(",")):
         seconds = budget / args.threads
         runs = {"cycles": lambda path: cycles(scene, seconds, args.threads, path / "frame_0001.exr", seed=1)}
-        runs |= {name: (lambda path, b=binary: caustic(b, gltf, seconds, args.threads, path, seed=1))
-                 for name, binary in binaries.items()}
+        runs |= {name: (lambda path, b=binary, m=method: caustic(b, m, gltf, seconds, args.threads, path, seed=1))
+                 for name, (binary, method) in binaries.items()}
         row = {"cpu_s_budget": budget}
         for name, run in runs.items():
             folder = out / f"{name}_{budget:g}s"
@@ -154,8 +158,10 @@ def main():
             error = relative_mse(folder / "frame_0001.exr", references[name], mask)
             row[name] = {"relative_mse": error, "cpu_s": round(cpu, 1), "wall_s": round(time.perf_counter() - start, 1)}
             print(f"{budget:g} CPU s: {name} relative MSE {error:.3e} ({cpu:.1f} CPU s)", flush=True)
-        row["cycles_over_caustic"] = row["cycles"]["relative_mse"] / row["caustic"]["relative_mse"]
-        print(f"{budget:g} CPU s: Cycles' error / Caustic's = {row['cycles_over_caustic']:.2f}", flush=True)
+        for method in args.methods:
+            ratio = row["cycles"]["relative_mse"] / row[f"caustic_{method}"]["relative_mse"]
+            row[f"cycles_over_caustic_{method}"] = ratio
+            print(f"{budget:g} CPU s: Cycles' error / Caustic {method}'s = {ratio:.2f}", flush=True)
         results["runs"].append(row)
     (out / "results.json").write_text(json.dumps(results, indent=1) + "\n")
 

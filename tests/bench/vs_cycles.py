@@ -149,6 +149,12 @@ def above_floor(error, floor):
     return None if error is None or floor is None else error - floor
 
 
+def method_of(flags):
+    """The `--method` that Caustic's `flags` ask for (its default, `sppm`, where they ask none)."""
+    words = flags.split()
+    return words[words.index("--method") + 1] if "--method" in words[:-1] else "sppm"
+
+
 def make_reference(binary, name, args):
     """Renders tests/bench/<name>.exr with Caustic, as the mean of two halves with other seeds, and
     records how, and its own error from the halves' difference, in references.json."""
@@ -170,7 +176,7 @@ def make_reference(binary, name, args):
     provenance_path = HERE / "references.json"
     provenance = json.loads(provenance_path.read_text()) if provenance_path.exists() else {}
     provenance[name] = {
-        "renderer": "caustic render (SPPM), this repository", "commit": commit,
+        "renderer": f"caustic render ({method_of(args.caustic_flags).upper()}), this repository", "commit": commit,
         "scene": f"scenes/make_scenes.py {SCENES[name].__name__}(), exported by the add-on",
         "resolution": list(args.resolution), "passes": args.make_reference,
         "seeds": list(REFERENCE_SEEDS), "made_as": "the mean of two renders of half the passes, one per seed",

@@ -121,9 +121,10 @@ def caustic_run(gltf, folder, method, args, reference):
     return caustic_curve(log, args.threads)
 
 
-def slope(curve, low, high):
-    """The least-squares slope of log error against log CPU time over [low, high]."""
-    points = [(math.log(t), math.log(e)) for t, e, _ in curve if low * 0.9 <= t <= high * 1.1 and e > 0]
+def slope(curve, low, high, floor=0.0):
+    """The least-squares slope of log error against log CPU time over [low, high], of the error
+    less `floor` (the reference's own, which adds to every error measured against it)."""
+    points = [(math.log(t), math.log(e - floor)) for t, e, _ in curve if low * 0.9 <= t <= high * 1.1 and e > floor]
     if len(points) < 2:
         return None
     mx = sum(x for x, _ in points) / len(points)
@@ -156,10 +157,13 @@ def bench_scene(name, args):
               f"relative MSE {curve[-1][1]:.3e}")
     budgets = [b for b in args.budgets]
     table = {who: [error_at(curve, b) for b in budgets] for who, curve in curves.items()}
+    floor = reference_floor(name)
     slopes = {who: slope(curve, min(budgets), max(budgets)) for who, curve in curves.items()}
+    slopes_above_floor = {who: slope(curve, min(budgets), max(budgets), floor) if floor else None
+                          for who, curve in curves.items()}
     contact_sheet(folder, images, reference)
-    return {"scene": name, "budgets_cpu_s": budgets, "relative_mse": table, "slopes": slopes, "curves": curves,
-            "reference_floor": reference_floor(name)}
+    return {"scene": name, "budgets_cpu_s": budgets, "relative_mse": table, "slopes": slopes,
+            "slopes_above_floor": slopes_above_floor, "curves": curves, "reference_floor": floor}
 
 
 def contact_sheet(folder, images, reference):
@@ -188,6 +192,9 @@ def print_table(result):
         print(f"{budget:>7g} " + " ".join(f"{fmt(table[w][i], '.3e'):>13}" for w in who)
               + f"  {fmt(ratios[0], '.2f'):>12}x {fmt(ratios[1], '.2f'):>8}x")
     print(f"{'slope':>7} " + " ".join(f"{fmt(result['slopes'][w], '.2f'):>13}" for w in who))
+    if floor is not None:
+        print(f"{'> floor':>7} " + " ".join(f"{fmt(result['slopes_above_floor'][w], '.2f'):>13}" for w in who)
+              + "  (slopes of the error less the reference's own)")
 
 
 def chart(results, path):
