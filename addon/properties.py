@@ -84,7 +84,7 @@ class CausticRenderSettings(bpy.types.PropertyGroup):
                                           "path first meets a diffuse surface"),
                ("VCM", "Connection and Merging", "Vertex connection and merging: photon merging at every bounce, "
                                                  "combined with path tracing, light tracing and connections (not yet "
-                                                 "for fog that scatters, nor point and spot lights with a radius)")],
+                                                 "for fog that scatters)")],
         default="SPPM", description="How each pass combines camera paths and photon paths")
     alpha: FloatProperty(name="Alpha", default=2.0 / 3.0, min=0.01, max=0.99,
                          description="How fast the gather radius shrinks (Knaus & Zwicker)")

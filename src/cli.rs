@@ -149,7 +149,7 @@ pub struct RenderArgs {
     /// How a pass combines camera and light paths: stochastic progressive photon mapping, or
     /// vertex connection and merging (photon merging at every camera vertex, combined with path
     /// tracing, light tracing and connections by multiple importance sampling; not yet for media
-    /// or lights with a radius).
+    /// that scatter).
     #[arg(long, value_enum, default_value_t = Method::Sppm)]
     method: Method,
     /// Also write Cycles' Denoising Albedo and Denoising Normal passes (for Blender's Denoise

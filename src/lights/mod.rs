@@ -237,9 +237,6 @@ pub struct EmissionDensity {
     /// light's: per area of the disc its photons start on and per solid angle; a point's: per
     /// solid angle).
     pub emission: f32,
-    /// The density with which next-event estimation picks the ray's point on the light: per area
-    /// (a distant light's direction: per solid angle); 1 for a delta light.
-    pub direct: f32,
     /// The cosine between the ray and the light's normal (1 for points and distant lights).
     pub cos: f32,
     /// No path can meet the light: a point, or a sun without a disc.
@@ -428,17 +425,18 @@ impl Light {
 }
 
 impl Light {
-    /// How densely [`Light::emit_photon`] emits a photon along the unit `direction` of travel
-    /// from a point of the light, and [`Light::sample_incident`] picks that point (each light's
-    /// points are uniform over it); `None` for a point or spot light with a radius
-    /// (its Soft Falloff disc faces each receiver, so no one density describes it) or where it
-    /// emits nothing that way.
-    pub fn emission_density(&self, direction: Vec3) -> Option<EmissionDensity> {
+    /// How densely [`Light::emit_photon`] emits a photon from the point `q` of the light (read
+    /// only for a sphere's normal) along the unit `direction` of travel; `None` where it emits
+    /// nothing that way. A light with a radius is its sphere here, Soft Falloff or not (see
+    /// [`Light::sample_surface_incident`]).
+    pub fn emission_density(&self, q: Vec3, direction: Vec3) -> Option<EmissionDensity> {
         let density = match self {
-            Light::Sphere(sphere) if sphere.radius > 0.0 => return None,
+            Light::Sphere(sphere) if sphere.radius > 0.0 => {
+                let (emission, cos) = sphere.surface_emission(q, direction)?;
+                EmissionDensity { emission, cos, delta: false, finite: true }
+            }
             Light::Sphere(sphere) => EmissionDensity {
                 emission: 1.0 / sphere.beam.map_or(4.0 * PI, |b| b.outer.solid_angle()),
-                direct: 1.0,
                 cos: 1.0,
                 delta: true,
                 finite: true,
@@ -450,7 +448,7 @@ impl Light {
                     false if disc.contains(*axis, direction) => (1.0 / disc.solid_angle(), false),
                     false => return None,
                 };
-                EmissionDensity { emission: direct / disc_area, direct, cos: 1.0, delta, finite: false }
+                EmissionDensity { emission: direct / disc_area, cos: 1.0, delta, finite: false }
             }
             Light::Triangle(triangle) => {
                 let cos = triangle.normal.dot(direction);
@@ -465,18 +463,15 @@ impl Light {
                 }
                 EmissionDensity {
                     emission: per_direction / (triangle.sides() * triangle.area),
-                    direct: 1.0 / triangle.area,
                     cos,
                     delta: false,
                     finite: true,
                 }
             }
             Light::World(world) => {
-                let direct = world.pdf(-direction);
                 let disc_area = PI * world.sphere.radius * world.sphere.radius;
                 EmissionDensity {
-                    emission: direct / disc_area,
-                    direct,
+                    emission: world.pdf(-direction) / disc_area,
                     cos: 1.0,
                     delta: false,
                     finite: false,
@@ -484,6 +479,34 @@ impl Light {
             }
         };
         (density.emission > 0.0 && density.emission.is_finite()).then_some(density)
+    }
+
+    /// The density with which [`Light::sample_surface_incident`] from `receiver` picks the point
+    /// `q` of the light that sends light along the unit `direction` of travel: per area (a
+    /// distant light's direction: per solid angle); 1 for a delta light.
+    pub fn direct_density(&self, receiver: Vec3, q: Vec3, direction: Vec3) -> f32 {
+        match self {
+            Light::Sphere(sphere) if sphere.radius > 0.0 => sphere.surface_density(receiver, q),
+            Light::Sphere(_) => 1.0,
+            Light::Sun { direction: axis, disc, .. } => match disc.is_delta() {
+                true => 1.0,
+                false if disc.contains(*axis, direction) => 1.0 / disc.solid_angle(),
+                false => 0.0,
+            },
+            Light::Triangle(triangle) => 1.0 / triangle.area,
+            Light::World(world) => world.pdf(-direction),
+        }
+    }
+
+    /// As [`Light::sample_incident`], but a light with a radius on its sphere, with Soft
+    /// Falloff's factor on what arrives, rather than on the disc facing `p` that stands for it
+    /// there: the light as vertex connection and merging meets it, one surface that every one of
+    /// its techniques reaches alike (light paths leave the sphere and camera paths meet it).
+    pub fn sample_surface_incident(&self, p: Vec3, u: Vec2, lambda: &Wavelengths) -> Option<LightSample> {
+        match self {
+            Light::Sphere(sphere) if sphere.radius > 0.0 => sphere.sample_surface(p, u, lambda),
+            _ => self.sample_incident(p, u, lambda),
+        }
     }
 }
 

@@ -161,31 +161,88 @@ impl SphereLight {
                 pdf,
             });
         }
-        let (wi, distance, radiance_over_pdf, pdf) = match self.seen_from(centre_distance) {
-            Some(cone) => {
-                let local = square_to_cone(u, cone.one_minus_cos);
-                let (t, b) = basis(to_centre);
-                let wi = (t * local.x + b * local.y + to_centre * local.z).normalize();
-                let along = centre_distance * local.z;
-                let chord =
-                    self.radius * self.radius - centre_distance * centre_distance * (1.0 - local.z * local.z);
-                let distance = along - chord.max(0.0).sqrt();
-                let solid_angle = cone.solid_angle();
-                (wi, distance, self.radiance(-wi, lambda) * solid_angle, 1.0 / solid_angle)
-            }
-            None => {
-                let falloff = self.falloff(-to_centre);
-                let radiance_over_pdf =
-                    self.intensity.eval(lambda) * (falloff / (centre_distance * centre_distance));
-                (to_centre, centre_distance, radiance_over_pdf, 0.0)
-            }
+        let sample = match self.seen_from(centre_distance) {
+            Some(cone) => self.sample_cone((to_centre, centre_distance), cone, u, lambda),
+            None => LightSample {
+                wi: to_centre,
+                distance: centre_distance,
+                radiance_over_pdf: self.intensity.eval(lambda)
+                    * (self.falloff(-to_centre) / (centre_distance * centre_distance)),
+                pdf: 0.0,
+            },
         };
-        (radiance_over_pdf.max_element() > 0.0).then_some(LightSample {
+        (sample.radiance_over_pdf.max_element() > 0.0).then_some(sample)
+    }
+
+    /// Samples light arriving at `p` from the sphere's own surface, as vertex connection and
+    /// merging meets a light with a radius (`sppm/vcm/`): a direction uniform over the solid angle
+    /// the sphere covers, times Soft Falloff's factor at `p` where the light has it (which makes
+    /// the sphere light `p` as the disc facing it does, exactly where the light is wholly above
+    /// `p`'s horizon and unblocked). `None` for a point and from inside the sphere, which it does
+    /// not light.
+    pub fn sample_surface(&self, p: Vec3, u: Vec2, lambda: &Wavelengths) -> Option<LightSample> {
+        let (to_centre, centre_distance) = direction_and_distance(p, self.position)?;
+        let cone = self.seen_from(centre_distance)?;
+        let mut sample = self.sample_cone((to_centre, centre_distance), cone, u, lambda);
+        sample.radiance_over_pdf *= self.receiver_factor(p);
+        (sample.radiance_over_pdf.max_element() > 0.0).then_some(sample)
+    }
+
+    /// A direction uniform over `cone`, the sphere seen from a point outside it in the direction
+    /// `to_centre` at `centre_distance` from its centre.
+    fn sample_cone(
+        &self,
+        (to_centre, centre_distance): (Vec3, f32),
+        cone: Cone,
+        u: Vec2,
+        lambda: &Wavelengths,
+    ) -> LightSample {
+        let local = square_to_cone(u, cone.one_minus_cos);
+        let (t, b) = basis(to_centre);
+        let wi = (t * local.x + b * local.y + to_centre * local.z).normalize();
+        let along = centre_distance * local.z;
+        let chord = self.radius * self.radius - centre_distance * centre_distance * (1.0 - local.z * local.z);
+        let solid_angle = cone.solid_angle();
+        LightSample {
             wi,
-            distance,
-            radiance_over_pdf,
-            pdf,
-        })
+            distance: along - chord.max(0.0).sqrt(),
+            radiance_over_pdf: self.radiance(-wi, lambda) * solid_angle,
+            pdf: 1.0 / solid_angle,
+        }
+    }
+
+    /// Soft Falloff's factor on the light the sphere sends to `p` (1 without Soft Falloff).
+    pub fn receiver_factor(&self, p: Vec3) -> f32 {
+        self.photon_falloff().map_or(1.0, |soft| soft.at(p))
+    }
+
+    /// The density with which [`SphereLight::sample_surface`] from `receiver` picks the point
+    /// `q` of the sphere, per area of the sphere (0 from inside it or for a point).
+    pub fn surface_density(&self, receiver: Vec3, q: Vec3) -> f32 {
+        let Some(cone) = self.seen_from(receiver.distance(self.position)) else { return 0.0 };
+        let offset = receiver - q;
+        let distance2 = offset.length_squared();
+        let cos = self.normal_at(q).dot(offset) / distance2.sqrt();
+        if cos > 0.0 {
+            cos / (distance2 * cone.solid_angle())
+        } else {
+            0.0
+        }
+    }
+
+    /// How densely [`SphereLight::emit_photon`] starts a photon at the point `q` of the sphere
+    /// (per area) travelling along the unit `direction` (per solid angle), and the cosine there
+    /// between the sphere's normal and `direction`; `None` where it does not emit that way.
+    pub fn surface_emission(&self, q: Vec3, direction: Vec3) -> Option<(f32, f32)> {
+        let (axis, cone) = self.cone();
+        let cos = self.normal_at(q).dot(direction);
+        let inside = cone.contains(axis, direction) && cos > 0.0;
+        inside.then(|| (cos / (PI * self.radius * self.radius * cone.solid_angle()), cos))
+    }
+
+    /// The sphere's outward unit normal at its point `q`.
+    fn normal_at(&self, q: Vec3) -> Vec3 {
+        (q - self.position).normalize_or_zero()
     }
 
     /// The density per solid angle of the direction `wi` toward a point `distance` away on the
@@ -213,14 +270,21 @@ impl SphereLight {
     /// The distance along the ray from `origin` along the unit `direction` to where it meets the
     /// sphere from outside (or the disc facing `origin`), if it does before `t_max`.
     pub fn hit(&self, origin: Vec3, direction: Vec3, t_max: f32) -> Option<f32> {
-        let to_centre = self.position - origin;
-        let r2 = self.radius * self.radius;
         if self.is_disc() {
+            let to_centre = self.position - origin;
             let normal = -to_centre.normalize_or_zero();
             let t = to_centre.dot(normal) / direction.dot(normal);
-            let inside = (origin + direction * t).distance_squared(self.position) < r2;
+            let inside = (origin + direction * t).distance_squared(self.position) < self.radius * self.radius;
             return (t > 0.0 && t < t_max && inside).then_some(t);
         }
+        self.surface_hit(origin, direction, t_max)
+    }
+
+    /// The distance along the ray from `origin` along the unit `direction` to where it meets the
+    /// sphere itself from outside (Soft Falloff or not), if it does before `t_max`.
+    pub fn surface_hit(&self, origin: Vec3, direction: Vec3, t_max: f32) -> Option<f32> {
+        let to_centre = self.position - origin;
+        let r2 = self.radius * self.radius;
         let along = to_centre.dot(direction);
         let gap2 = (to_centre - direction * along).length_squared();
         if self.radius <= 0.0 || along <= 0.0 || gap2 >= r2 || to_centre.length_squared() <= r2 {
@@ -327,6 +391,60 @@ mod tests {
             assert!((photons.at(Vec3::ZERO) - 9.0 / (9.0 + radius * radius)).abs() < 1e-6);
         }
         assert!(ball(0.5).photon_falloff().is_none());
+    }
+
+    #[test]
+    fn sampled_on_its_sphere_a_light_lights_as_its_disc_and_knows_the_density_of_each_point() {
+        // Irradiance on a plane facing the light 3 away: I / (d^2 + r^2) with Soft Falloff (the
+        // disc's), I / d^2 without; each sample's point is on the sphere, where the ray from the
+        // receiver meets it, with the density per area `surface_density` gives.
+        let lambda = Wavelengths::single(555.0, 1.0);
+        for (soft_falloff, radius) in [(true, 0.5), (true, 2.0), (false, 1.0)] {
+            let light = SphereLight { soft_falloff, ..ball(radius) };
+            let n = 200;
+            let mut irradiance = 0.0;
+            for i in 0..n * n {
+                let u = Vec2::new(((i % n) as f32 + 0.5) / n as f32, ((i / n) as f32 + 0.5) / n as f32);
+                let s = light.sample_surface(Vec3::ZERO, u, &lambda).unwrap();
+                irradiance += s.radiance_over_pdf.x * s.wi.z / (n * n) as f32;
+                let q = s.wi * s.distance;
+                assert!((q.distance(light.position) - radius).abs() < 1e-4 * radius, "{q} is off the sphere");
+                assert_eq!(
+                    light.surface_hit(Vec3::ZERO, s.wi, f32::INFINITY).map(|t| (t - s.distance).abs() < 1e-4),
+                    Some(true)
+                );
+                let cos = (q - light.position).normalize().dot(-s.wi);
+                let area = light.surface_density(Vec3::ZERO, q);
+                assert!((area - s.pdf * cos / (s.distance * s.distance)).abs() < 1e-3 * area, "{area}");
+            }
+            let expected = if soft_falloff { 1.0 / (9.0 + radius * radius) } else { 1.0 / 9.0 };
+            let e = irradiance / crate::spectrum::d65(555.0);
+            assert!((e / expected - 1.0).abs() < 2e-3, "radius {radius}: {e} vs {expected}");
+        }
+        assert!(ball(1.0).sample_surface(Vec3::new(0.0, 0.0, 2.5), Vec2::splat(0.5), &lambda).is_none());
+    }
+
+    #[test]
+    fn a_photons_start_has_the_density_the_light_says() {
+        // The emission density per area and solid angle checked against the photons' own
+        // distribution: E[cos^2 / density] over photons is the integral of cos^2 over the pairs
+        // of a point of the sphere and a direction it faces, 4 pi r^2 * 2 pi / 3.
+        let light = ball(0.5);
+        let lambda = Wavelengths::single(555.0, 1.0);
+        let n = 300;
+        let mut measure = 0.0f64;
+        for i in 0..n * n {
+            let a = Vec2::new(((i % n) as f32 + 0.5) / n as f32, ((i / n) as f32 + 0.5) / n as f32);
+            let b =
+                Vec2::new(((i * 7 % n) as f32 + 0.5) / n as f32, ((i * 13 / n % n) as f32 + 0.5) / n as f32);
+            let photon = light.emit_photon(a, b, &lambda);
+            if let Some((density, cos)) = light.surface_emission(photon.origin, photon.direction) {
+                assert!(cos > 0.0 && cos <= 1.0 + 1e-5);
+                measure += f64::from(cos * cos / density) / (n * n) as f64;
+            }
+        }
+        let expected = 4.0 * std::f64::consts::PI * 0.25 * 2.0 * std::f64::consts::PI / 3.0;
+        assert!((measure / expected - 1.0).abs() < 0.02, "{measure} vs {expected}");
     }
 
     #[test]

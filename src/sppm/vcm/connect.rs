@@ -31,14 +31,15 @@ pub fn direct_light(
         return SampledSpectrum::ZERO;
     };
     let light = &renderer.scene.lights[index];
-    let Some(sample) = light.sample_incident(camera.p, rng.next_2d(), &pass.wavelengths) else {
+    let Some(sample) = light.sample_surface_incident(camera.p, rng.next_2d(), &pass.wavelengths) else {
         return SampledSpectrum::ZERO;
     };
     if !reaches(camera, sample.wi) {
         return SampledSpectrum::ZERO;
     }
     let f = camera.bsdf.eval(camera.frame, camera.wo, sample.wi);
-    let Some(density) = light.emission_density(-sample.wi) else { return SampledSpectrum::ZERO };
+    let q = camera.p + sample.wi * sample.distance;
+    let Some(density) = light.emission_density(q, -sample.wi) else { return SampledSpectrum::ZERO };
     if f.max_element() <= 0.0 {
         return SampledSpectrum::ZERO;
     }

@@ -13,6 +13,7 @@ use super::mis::{emitter_met, Partials, PassWeights, Scatter};
 use super::view::View;
 use super::LightSubpaths;
 use crate::geometry::offset_origin;
+use crate::lights::Light;
 use crate::materials::Transport;
 use crate::scene::NOT_A_LIGHT;
 use crate::spectrum::{hero_only, SampledSpectrum, LANES};
@@ -20,7 +21,7 @@ use crate::sppm::photons::chunk_of;
 #[cfg(doc)]
 use crate::sppm::photons::photon_chunks;
 use crate::sppm::renderer::{PassSamples, PassStats, PixelEstimate, Renderer, MAX_DEPTH};
-use crate::sppm::visible::{start_eye_path, Meeting};
+use crate::sppm::visible::{start_eye_path, EyeState, Meeting};
 
 /// Bounces before Russian roulette may end a camera path.
 const ROULETTE_AFTER: u32 = 3;
@@ -73,7 +74,12 @@ pub fn trace_camera_path(
     while state.depth < MAX_DEPTH {
         stats.eye_rays += 1;
         let direction = Vec3::from(state.direction);
-        let Some(hit) = renderer.accel.intersect(state.origin.into(), direction, f32::INFINITY) else {
+        let hit = renderer.accel.intersect(state.origin.into(), direction, f32::INFINITY);
+        if !scene.sphere_lights.is_empty() {
+            let segment = (travelled, hit.map_or(f32::INFINITY, |h| h.t));
+            radiance += finite(spheres_met(renderer, pass, (&state, &partials, previous), segment));
+        }
+        let Some(hit) = hit else {
             if state.camera_ray && scene.transparent_film {
                 coverage = 0.0;
             } else if !(renderer.has_volumes && state.media.medium(scene).is_some()) {
@@ -97,7 +103,7 @@ pub fn trace_camera_path(
                 let weight = match previous {
                     Some(prev) if light != NOT_A_LIGHT => {
                         let arrived = partials.arrived(Some(travelled), surface.frame.n().dot(wo));
-                        emitter_weight(renderer, &arrived, prev, light as usize, wo)
+                        emitter_weight(renderer, &arrived, prev, (light as usize, surface.p), wo)
                     }
                     _ => 1.0,
                 };
@@ -178,13 +184,62 @@ pub fn trace_camera_path(
     (PixelEstimate { radiance, laplacian, coverage }, stats)
 }
 
-/// The weight of emission from light `light` toward `wo` that a camera path of sums `arrived`
-/// meets, having scattered last at `prev`.
-fn emitter_weight(renderer: &Renderer, arrived: &Partials, prev: Previous, light: usize, wo: Vec3) -> f32 {
-    let Some(density) = renderer.scene.lights[light].emission_density(wo) else { return 1.0 };
-    let direct = renderer.light_probability(prev.p, prev.n, light) * density.direct;
+/// The weight of emission from the point `q` of light `light` toward `wo` that a camera path of
+/// sums `arrived` meets, having scattered last at `prev`.
+fn emitter_weight(
+    renderer: &Renderer,
+    arrived: &Partials,
+    prev: Previous,
+    (light, q): (usize, Vec3),
+    wo: Vec3,
+) -> f32 {
+    let source = &renderer.scene.lights[light];
+    let Some(density) = source.emission_density(q, wo) else { return 1.0 };
+    let direct = renderer.light_probability(prev.p, prev.n, light) * source.direct_density(prev.p, q, wo);
     let emission = renderer.light_choice.probability(light) * density.emission;
     emitter_met(arrived, direct, emission)
+}
+
+/// What the sphere lights send to a camera path of sums `partials` (having scattered last at
+/// `previous`) along its segment from `state` of `length`, `travelled` past its last vertex
+/// already: each sphere the segment meets before its end (they hide nothing), times what the
+/// volume there keeps of its light. The camera's own ray sees the lights visible to the camera
+/// as SPPM's does (Soft Falloff's disc facing the camera, weight 1: no other technique finds
+/// them); past a vertex the path meets each sphere itself, with Soft Falloff's factor at the
+/// vertex, weighted against the techniques that reach it from the other end (see
+/// [`crate::lights::Light::sample_surface_incident`]).
+fn spheres_met(
+    renderer: &Renderer,
+    pass: &PassSamples,
+    (state, partials, previous): (&EyeState, &Partials, Option<Previous>),
+    (travelled, length): (f32, f32),
+) -> SampledSpectrum {
+    let scene = renderer.scene;
+    let lambda = &pass.wavelengths;
+    let (origin, direction) = (Vec3::from(state.origin), Vec3::from(state.direction));
+    let kept = |t: f32| match renderer.has_volumes {
+        true => state.media.transmittance(scene, lambda, t).unwrap_or(SampledSpectrum::ONE),
+        false => SampledSpectrum::ONE,
+    };
+    let Some(prev) = previous else {
+        return scene
+            .spheres_met(origin, direction, length)
+            .filter(|(_, sphere, _)| sphere.seen_by_camera || !state.camera_ray)
+            .map(|(_, sphere, t)| state.beta * sphere.radiance(-direction, lambda) * kept(t))
+            .sum();
+    };
+    let mut sum = SampledSpectrum::ZERO;
+    for &i in &scene.sphere_lights {
+        let Light::Sphere(sphere) = &scene.lights[i] else { continue };
+        let Some(t) = sphere.surface_hit(origin, direction, length) else { continue };
+        let q = origin + direction * t;
+        let cos = (q - sphere.position).normalize_or_zero().dot(-direction);
+        let arrived = partials.arrived(Some(travelled + t), cos);
+        let weight = emitter_weight(renderer, &arrived, prev, (i, q), -direction);
+        let radiance = sphere.radiance(-direction, lambda) * sphere.receiver_factor(prev.p);
+        sum += state.beta * radiance * kept(t) * weight;
+    }
+    sum
 }
 
 /// What the distant lights send along `direction` to a camera path of sums `partials` that
@@ -205,7 +260,8 @@ fn escaped(
             let radiance = scene.lights[i].escaped_radiance(direction, &pass.wavelengths);
             let weight = match previous {
                 Some(prev) if radiance.max_element() > 0.0 => {
-                    emitter_weight(renderer, partials, prev, i, -direction)
+                    // A distant light has no point: its densities read the direction alone.
+                    emitter_weight(renderer, partials, prev, (i, prev.p), -direction)
                 }
                 _ => 1.0,
             };

@@ -8,6 +8,7 @@ use super::mis::{light_traced, End, Partials, PassWeights, Scatter};
 use super::view::View;
 use super::{kept, visibility};
 use crate::geometry::offset_origin;
+use crate::lights::SoftFalloff;
 use crate::materials::{Bsdf, Lobe, Transport};
 use crate::sampling::Sampler;
 use crate::spectrum::{hero_only, SampledSpectrum, LANES};
@@ -73,8 +74,11 @@ struct Walk {
     throughput: SampledSpectrum,
     hero_only: bool,
     partials: Partials,
-    /// The light it left (its choice probability at the first vertex completes the sums).
-    light: usize,
+    /// The light it left and the point it left from (next-event estimation's density of that
+    /// point from the first vertex completes the sums).
+    light: (usize, Vec3),
+    /// Soft Falloff's factor on the flux, still to be taken where the path first meets a surface.
+    soft_falloff: Option<SoftFalloff>,
     /// Distance since the last vertex, across surfaces that alpha cut away.
     travelled: f32,
     /// Whether the path left a distant light and has met nothing yet.
@@ -132,7 +136,12 @@ pub fn trace_light_path(
         let distance = (!walk.from_distance || walk.segments > 0).then_some(walk.travelled);
         walk.partials = walk.partials.arrived(distance, n.dot(wo));
         if walk.segments == 0 {
-            walk.partials = walk.partials.chosen_at(renderer.light_probability(surface.p, n, walk.light));
+            let (light, q) = walk.light;
+            let direct = scene.lights[light].direct_density(surface.p, q, walk.direction.into());
+            walk.partials = walk.partials.chosen_at(renderer.light_probability(surface.p, n, light) * direct);
+            if let Some(soft) = walk.soft_falloff {
+                walk.throughput *= soft.at(surface.p);
+            }
         }
         walk.segments += 1;
         walk.travelled = 0.0;
@@ -190,11 +199,10 @@ fn start(renderer: &Renderer, pass: &PassSamples, weights: &PassWeights, k: u64)
     let (light, p_light) = renderer.light_choice.sample(rng.next_1d())?;
     let source = &renderer.scene.lights[light];
     let emitted = source.emit_photon(rng.next_2d(), rng.next_2d(), &pass.wavelengths)?;
-    let density = source.emission_density(emitted.direction)?;
+    let density = source.emission_density(emitted.origin, emitted.direction)?;
     let partials = Partials::leaving_light(
         weights,
         density.emission * p_light,
-        density.direct,
         density.cos,
         density.delta,
         density.finite,
@@ -205,7 +213,8 @@ fn start(renderer: &Renderer, pass: &PassSamples, weights: &PassWeights, k: u64)
         throughput: emitted.flux / p_light,
         hero_only: false,
         partials,
-        light,
+        light: (light, emitted.origin),
+        soft_falloff: source.photon_falloff(),
         travelled: 0.0,
         from_distance: !density.finite,
         segments: 0,

@@ -95,18 +95,11 @@ pub struct Scatter {
 }
 
 impl Partials {
-    /// A light path leaving a light whose emission density is `emission` (choice included),
-    /// whose next-event density is `direct` (choice at the receiver still to come: see
-    /// [`Partials::chosen_at`]), at `cos` from its normal.
-    pub fn leaving_light(
-        pass: &PassWeights,
-        emission: f32,
-        direct: f32,
-        cos: f32,
-        delta: bool,
-        finite: bool,
-    ) -> Self {
-        let vcm = mis(direct / emission);
+    /// A light path leaving a light whose emission density is `emission` (choice included), at
+    /// `cos` from its normal; next-event estimation's density of its point is still to come, at
+    /// the receiver (see [`Partials::chosen_at`]).
+    pub fn leaving_light(pass: &PassWeights, emission: f32, cos: f32, delta: bool, finite: bool) -> Self {
+        let vcm = mis(1.0 / emission);
         let vc = match (delta, finite) {
             (true, _) => 0.0,
             (false, true) => mis(cos / emission),
@@ -136,10 +129,11 @@ impl Partials {
         Partials { vc_to_light: 0.0, ..self }
     }
 
-    /// A light path's first vertex: next-event estimation there chooses its light with
-    /// probability `p_choice`.
-    pub fn chosen_at(self, p_choice: f32) -> Self {
-        Partials { vcm: self.vcm * mis(p_choice), ..self }
+    /// A light path's first vertex: next-event estimation there picks the path's point on its
+    /// light with density `direct` (per area, or per solid angle for a distant light; the light's
+    /// choice included).
+    pub fn chosen_at(self, direct: f32) -> Self {
+        Partials { vcm: self.vcm * mis(direct), ..self }
     }
 
     /// Arriving at a vertex at `distance` (`None` for the first segment from a distant light),
@@ -314,12 +308,11 @@ mod tests {
         /// The light subpath's sums at `v[last]`, as `light_paths.rs` carries them.
         fn light_sums(&self, s: &Setup, last: usize) -> Partials {
             let emission = self.cos(0, 1) * FRAC_1_PI / s.area * s.p_emit;
-            let mut sums =
-                Partials::leaving_light(&s.pass, emission, 1.0 / s.area, self.cos(0, 1), false, true);
+            let mut sums = Partials::leaving_light(&s.pass, emission, self.cos(0, 1), false, true);
             for i in 1..=last {
                 sums = sums.arrived(Some(self.d2(i - 1, i).sqrt()), self.cos(i, i - 1));
                 if i == 1 {
-                    sums = sums.chosen_at(s.p_nee);
+                    sums = sums.chosen_at(s.p_nee / s.area);
                 }
                 if i < last {
                     let scatter = Scatter {

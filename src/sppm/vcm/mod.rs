@@ -12,10 +12,17 @@
 //! settings, seed, pass index), as an SPPM pass does, with the same radius sequence.
 //!
 //! Media that only absorb (coloured glass, water, gems) weigh every segment and connection by
-//! their transmittance, which every technique computes alike and leaves out of the weights. Not
-//! yet rendered this way (a scene with them is refused with `--method vcm`): media that scatter,
-//! and point and spot lights with a radius. Reuse across frames does not share VCM paths: each frame
-//! renders its own.
+//! their transmittance, which every technique computes alike and leaves out of the weights.
+//!
+//! A point or spot light with a radius is its sphere to every technique: light paths leave it,
+//! camera paths meet it, next-event estimation samples the solid angle it covers. With Soft
+//! Falloff (Blender's default), which makes the light a disc facing whatever it lights, the
+//! sphere's light is scaled at the point it lights by the disc's falloff, `d^2 / (d^2 + r^2)`, as
+//! SPPM's photons are: the same light wherever the light is wholly above that point's horizon
+//! (`lights/sphere.rs`). The camera itself sees the disc, as under SPPM.
+//!
+//! Not yet rendered this way (a scene with them is refused with `--method vcm`): media that
+//! scatter. Reuse across frames does not share VCM paths: each frame renders its own.
 
 mod connect;
 mod eye_paths;
@@ -31,7 +38,6 @@ use super::photons::photon_chunks;
 use super::renderer::{collect_counting, PassSamples, PassStats, PixelEstimate, Renderer};
 use super::see_through;
 use crate::geometry::offset_origin;
-use crate::lights::Light;
 use crate::scene::{media_scatter, Scene};
 use crate::spectrum::{SampledSpectrum, Wavelengths};
 use eye_paths::{trace_camera_path, Lights};
@@ -43,11 +49,8 @@ use view::View;
 
 /// Why `scene` cannot be rendered by vertex connection and merging yet, if it cannot.
 pub fn unsupported(scene: &Scene) -> Option<String> {
-    if media_scatter(&scene.materials, &scene.fog) {
-        return Some("media that scatter (volume scattering or fog)".into());
-    }
-    let sphere = scene.lights.iter().any(|l| matches!(l, Light::Sphere(s) if s.radius > 0.0));
-    sphere.then(|| "point and spot lights with a radius (set their radius to 0)".into())
+    media_scatter(&scene.materials, &scene.fog)
+        .then(|| "media that scatter (volume scattering or fog)".into())
 }
 
 /// `value`, or zero where it is not a finite number (a weight or density that overflowed at a
