@@ -35,7 +35,9 @@ def frame_spec(frames):
 def render_flags(scene):
     """`caustic render` flags from the scene's Caustic settings and its render region."""
     settings = scene.caustic
-    flags = ["--passes", str(settings.passes), "--alpha", repr(settings.alpha), "--seed", str(settings.seed)]
+    flags = ["--passes", str(settings.passes), "--seed", str(settings.seed)]
+    if settings.alpha > 0.0:
+        flags += ["--alpha", repr(settings.alpha)]
     if settings.denoise:
         flags.append("--denoising-passes")
     region = export.render_region(scene)

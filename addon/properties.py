@@ -86,8 +86,9 @@ class CausticRenderSettings(bpy.types.PropertyGroup):
                                                  "combined with path tracing, light tracing and connections (not yet "
                                                  "for fog that scatters)")],
         default="SPPM", description="How each pass combines camera paths and photon paths")
-    alpha: FloatProperty(name="Alpha", default=2.0 / 3.0, min=0.01, max=0.99,
-                         description="How fast the gather radius shrinks (Knaus & Zwicker)")
+    alpha: FloatProperty(name="Alpha", default=0.0, min=0.0, max=0.99,
+                         description="How fast the gather radius shrinks (Knaus & Zwicker); 0: the method's own "
+                                     "(2/3 for Photon Mapping, 0.8 for Connection and Merging)")
     seed: IntProperty(name="Seed", default=1, min=0, description="The same seed gives the same image")
     threads: IntProperty(name="Threads", default=0, min=0, max=256, description="Worker threads (0: all cores)")
     denoise: BoolProperty(name="Denoise", default=False, update=denoise_changed,

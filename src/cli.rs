@@ -108,9 +108,10 @@ pub struct RenderArgs {
     /// Photon paths per pass (default: one per pixel).
     #[arg(long, value_name = "N", value_parser = at_least_one)]
     photons: Option<u64>,
-    /// Radius reduction alpha of Knaus & Zwicker, in (0, 1).
-    #[arg(long, value_name = "A", default_value_t = 2.0 / 3.0, allow_negative_numbers = true, value_parser = unit_interval)]
-    alpha: f64,
+    /// Radius reduction alpha of Knaus & Zwicker, in (0, 1) (default: 2/3 for sppm, 0.8 for
+    /// vcm).
+    #[arg(long, value_name = "A", allow_negative_numbers = true, value_parser = unit_interval)]
+    alpha: Option<f64>,
     /// First-pass gather radius in scene units (default: from the view where the camera sees
     /// surfaces and the photons a pass lands there; `caustic info` prints it and what it comes from).
     #[arg(long, value_name = "R", allow_negative_numbers = true, value_parser = positive_f64)]

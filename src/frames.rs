@@ -69,8 +69,8 @@ pub struct RenderSettings {
     pub time_budget_s: Option<f64>,
     /// Photon paths per pass (default: one per pixel).
     pub photons: Option<usize>,
-    /// Knaus & Zwicker's alpha.
-    pub alpha: f64,
+    /// Knaus & Zwicker's alpha (default: the method's, [`Method::default_alpha`]).
+    pub alpha: Option<f64>,
     /// First-pass gather radius (default: from the scene's size).
     pub radius: Option<f64>,
     /// Resolution override.
@@ -121,7 +121,7 @@ impl RenderSettings {
             passes: None,
             time_budget_s: None,
             photons: None,
-            alpha: 2.0 / 3.0,
+            alpha: None,
             radius: None,
             resolution: None,
             crop: None,
@@ -398,7 +398,7 @@ impl Shot {
             height,
             crop,
             photons_per_pass,
-            alpha: settings.alpha,
+            alpha: settings.alpha.unwrap_or(settings.method.default_alpha()),
             // Measured from the view below when not given.
             initial_radius: settings.radius.unwrap_or(0.0),
             seed: settings.seed,
@@ -693,7 +693,7 @@ fn render_block(
     for &frame in frames {
         let film = Film::new(s.width, s.height, mode, settings.spectral_bins, settings.denoising_passes);
         let shown = settings.progress != ProgressStyle::None;
-        let monitor = Monitor::new(&settings.errors, frame, [s.width, s.height], settings.alpha, shown)?;
+        let monitor = Monitor::new(&settings.errors, frame, [s.width, s.height], s.alpha, shown)?;
         active.push(FrameInProgress { frame, film, monitor, stats: PassStats::default(), elapsed_s: 0.0 });
         // Without a shutter every pass of a frame sees the same instant: pose it once.
         own_poses.push((shot.still.is_none() && shot.shutter.length == 0.0).then(|| {

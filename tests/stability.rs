@@ -333,8 +333,12 @@ const CASES: &[Case] = &[
             b > 0.0 && b < a && a.is_finite(),
         ))
     }),
-    ("progressive: alpha 0.01", |d| furnace_mean(d, furnace(1.0, [0.0; 3], |_| {}), |s| s.alpha = 0.01)),
-    ("progressive: alpha 0.99", |d| furnace_mean(d, furnace(1.0, [0.0; 3], |_| {}), |s| s.alpha = 0.99)),
+    ("progressive: alpha 0.01", |d| {
+        furnace_mean(d, furnace(1.0, [0.0; 3], |_| {}), |s| s.alpha = Some(0.01))
+    }),
+    ("progressive: alpha 0.99", |d| {
+        furnace_mean(d, furnace(1.0, [0.0; 3], |_| {}), |s| s.alpha = Some(0.99))
+    }),
     ("progressive: 1 photon per pass", |d| {
         let path = furnace(1.0, [0.0; 3], |_| {}).write(d, "one_photon");
         let mut s = quick(&path, &d.join("out"));

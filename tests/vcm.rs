@@ -110,8 +110,9 @@ fn vcm_without_merging_converges_to_the_diffuse_box_reference() {
 /// divided by the kernel mass left on the surface where the disc reaches past its end, as the
 /// gather's sum is: the diffuse box's corners and edges are not darkened. Against the converged
 /// reference at 64x48 after 32 passes of radius 0.25, the mean of the 8x8 blocks' ratios within
-/// 2% and every block within 10% (measured over seeds 1-3: means +0.0% to +0.4%, blocks -3.5% to
-/// +6.5%; without the division, mean -3.9%, the blocks along the floor's edges -16%).
+/// 2% and every block within 10% (measured: mean +0.7%, blocks -2.8% to +6.4%; with merging
+/// credited its whole acceptance probability in the weights and alpha 2/3, over seeds 1-3, means
+/// +0.0% to +0.4%, and without the division mean -3.9%, the blocks along the floor's edges -16%).
 #[test]
 fn vcm_merging_keeps_the_diffuse_box_corners_bright() {
     let (image, reference) = vcm_diffuse_box(32, 0.25);
