@@ -120,9 +120,31 @@ impl Camera {
         let (origin, direction) = self.ray(film, aspect);
         let Some(lens) = self.lens else { return (origin, direction) };
         let focus = origin + direction * (lens.focus_distance / direction.dot(self.forward));
-        let p = aperture_point(&lens, u) * lens.aperture_radius;
-        let origin = origin + self.right * p.x + self.up * p.y;
+        let origin = self.lens_point(u);
         (origin, (focus - origin).normalize())
+    }
+
+    /// The point of the aperture that the uniform sample `u` picks (the camera's position for a
+    /// pinhole); every point of the aperture is as likely.
+    pub fn lens_point(&self, u: Vec2) -> Vec3 {
+        let Some(lens) = self.lens else { return self.position };
+        let p = aperture_point(&lens, u) * lens.aperture_radius;
+        self.position + self.right * p.x + self.up * p.y
+    }
+
+    /// Where the point `p` appears on the film through the aperture point `lens_point` (the
+    /// inverse of [`Camera::ray_through_lens`]: the film position whose ray from there passes
+    /// through `p`), or `None` behind the lens. A pinhole's is [`Camera::project`]'s.
+    pub fn project_through_lens(&self, p: Vec3, lens_point: Vec3, aspect: f32) -> Option<Vec2> {
+        let Some(lens) = self.lens else { return self.project(p, aspect) };
+        let along = (p - lens_point).dot(self.forward);
+        if !(along > 0.0) {
+            return None;
+        }
+        // The ray from the lens point through `p` meets the plane in focus where the pinhole ray
+        // of the same film position does.
+        let focus = lens_point + (p - lens_point) * (lens.focus_distance / along);
+        self.project(focus, aspect)
     }
 
     /// The ray through `film`, in [0, 1]^2 with (0, 0) the top-left corner, for an image of
@@ -281,6 +303,22 @@ mod tests {
 #[cfg(test)]
 mod lens_tests {
     use super::*;
+
+    #[test]
+    fn a_point_seen_through_the_lens_projects_back_to_the_film_position_of_its_ray() {
+        let lens = Lens { aperture_radius: 0.2, focus_distance: 3.0, blades: 6, blade_rotation: 0.1 };
+        let camera = Camera::perspective(Mat4::IDENTITY, 0.8).with_lens(Some(lens));
+        for i in 0..50 {
+            let film = Vec2::new((i as f32 * 0.618034).fract(), (i as f32 * 0.754878).fract());
+            let u = Vec2::new((i as f32 * 0.3819).fract(), (i as f32 * 0.5698).fract());
+            let (origin, direction) = camera.ray_through_lens(film, 1.5, u);
+            assert!(origin.distance(camera.lens_point(u)) < 1e-6);
+            for distance in [0.5, 3.0, 20.0] {
+                let back = camera.project_through_lens(origin + direction * distance, origin, 1.5).unwrap();
+                assert!(back.distance(film) < 1e-4, "{film} came back as {back} from {distance}");
+            }
+        }
+    }
 
     #[test]
     fn lens_rays_meet_on_the_plane_in_focus() {

@@ -2,7 +2,7 @@
 //! their BSDF is not a delta is kept, with the path's throughput and MIS sums, for connections,
 //! for merging and for light tracing (each vertex is connected to the camera at once).
 
-use glam::{Vec3, Vec3A};
+use glam::{Vec2, Vec3, Vec3A};
 
 use super::mis::{light_traced, End, Partials, PassWeights, Scatter};
 use super::view::View;
@@ -159,7 +159,9 @@ pub fn trace_light_path(
                 scale: surface.scale,
                 media: (walk.media, surface.material),
             };
-            if let Some(splat) = to_camera(renderer, pass, weights, view, &vertex, &mut stats) {
+            if let Some(splat) =
+                to_camera(renderer, pass, (weights, view), &vertex, &mut walk.rng, &mut stats)
+            {
                 splats.push(splat);
             }
             vertices.push(vertex);
@@ -224,14 +226,14 @@ fn start(renderer: &Renderer, pass: &PassSamples, weights: &PassWeights, k: u64)
     })
 }
 
-/// Light tracing: `vertex` seen by the camera, if it is and is not its light path's first, and
-/// its weighted radiance on the pixel.
+/// Light tracing: `vertex` seen by the camera (through a point of its lens drawn from `rng`), if
+/// it is and is not its light path's first, and its weighted radiance on the pixel.
 fn to_camera(
     renderer: &Renderer,
     pass: &PassSamples,
-    weights: &PassWeights,
-    view: &View,
+    (weights, view): (&PassWeights, &View),
     vertex: &LightVertex,
+    rng: &mut Sampler,
     stats: &mut PassStats,
 ) -> Option<Splat> {
     // Direct light is not light traced (see `mis.rs`): only vertices past the first, where
@@ -239,7 +241,8 @@ fn to_camera(
     if vertex.segments == 1 {
         return None;
     }
-    let landing = view.landing(vertex.p)?;
+    let u_lens = if view.has_lens() { rng.next_2d() } else { Vec2::ZERO };
+    let landing = view.landing(vertex.p, u_lens)?;
     let toward = landing.toward;
     if !vertex.reaches(toward) {
         return None;
