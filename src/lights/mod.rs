@@ -441,15 +441,14 @@ impl Light {
                 delta: true,
                 finite: true,
             },
-            Light::Sun { direction: axis, disc, sphere, .. } => {
-                let disc_area = PI * sphere.radius * sphere.radius;
-                let (direct, delta) = match disc.is_delta() {
-                    true => (1.0, true),
-                    false if disc.contains(*axis, direction) => (1.0 / disc.solid_angle(), false),
-                    false => return None,
-                };
-                EmissionDensity { emission: direct / disc_area, cos: 1.0, delta, finite: false }
-            }
+            // A distant light's photons start uniformly on a disc and leave it in the directions
+            // next-event estimation picks.
+            Light::Sun { disc, sphere, .. } => EmissionDensity {
+                emission: self.direct_density(q, q, direction) / (PI * sphere.radius * sphere.radius),
+                cos: 1.0,
+                delta: disc.is_delta(),
+                finite: false,
+            },
             Light::Triangle(triangle) => {
                 let cos = triangle.normal.dot(direction);
                 let cos = if triangle.both_sides { cos.abs() } else { cos };
@@ -468,15 +467,13 @@ impl Light {
                     finite: true,
                 }
             }
-            Light::World(world) => {
-                let disc_area = PI * world.sphere.radius * world.sphere.radius;
-                EmissionDensity {
-                    emission: world.pdf(-direction) / disc_area,
-                    cos: 1.0,
-                    delta: false,
-                    finite: false,
-                }
-            }
+            Light::World(world) => EmissionDensity {
+                emission: self.direct_density(q, q, direction)
+                    / (PI * world.sphere.radius * world.sphere.radius),
+                cos: 1.0,
+                delta: false,
+                finite: false,
+            },
         };
         (density.emission > 0.0 && density.emission.is_finite()).then_some(density)
     }
