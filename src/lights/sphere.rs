@@ -241,7 +241,7 @@ impl SphereLight {
     }
 
     /// The sphere's outward unit normal at its point `q`.
-    fn normal_at(&self, q: Vec3) -> Vec3 {
+    pub fn normal_at(&self, q: Vec3) -> Vec3 {
         (q - self.position).normalize_or_zero()
     }
 

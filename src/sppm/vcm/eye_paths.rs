@@ -233,7 +233,7 @@ fn spheres_met(
         let Light::Sphere(sphere) = &scene.lights[i] else { continue };
         let Some(t) = sphere.surface_hit(origin, direction, length) else { continue };
         let q = origin + direction * t;
-        let cos = (q - sphere.position).normalize_or_zero().dot(-direction);
+        let cos = sphere.normal_at(q).dot(-direction);
         let arrived = partials.arrived(Some(travelled + t), cos);
         let weight = emitter_weight(renderer, &arrived, prev, (i, q), -direction);
         let radiance = sphere.radiance(-direction, lambda) * sphere.receiver_factor(prev.p);
