@@ -82,7 +82,7 @@ class CausticRenderSettings(bpy.types.PropertyGroup):
         name="Method",
         items=[("SPPM", "Photon Mapping", "Stochastic progressive photon mapping: photons gathered where each pixel's "
                                           "path first meets a diffuse surface"),
-               ("VCM", "Connection and Merging", "Vertex connection and merging: photon merging at every bounce, "
+               ("VCM", "Connection and Merging", "Vertex connection and merging: photon merging where photon mapping gathers, "
                                                  "combined with path tracing, light tracing and connections (not yet "
                                                  "for fog that scatters)")],
         default="SPPM", description="How each pass combines camera paths and photon paths")

@@ -148,9 +148,9 @@ pub struct RenderArgs {
     #[arg(long, value_enum, default_value_t = PhotonSampling::Uniform)]
     photon_sampling: PhotonSampling,
     /// How a pass combines camera and light paths: stochastic progressive photon mapping, or
-    /// vertex connection and merging (photon merging at every camera vertex, combined with path
-    /// tracing, light tracing and connections by multiple importance sampling; not yet for media
-    /// that scatter).
+    /// vertex connection and merging (photon merging where SPPM gathers and at glossy vertices
+    /// before, combined with path tracing, light tracing and connections by multiple importance
+    /// sampling; not yet for media that scatter).
     #[arg(long, value_enum, default_value_t = Method::Sppm)]
     method: Method,
     /// Also write Cycles' Denoising Albedo and Denoising Normal passes (for Blender's Denoise

@@ -128,8 +128,9 @@ pub enum Method {
     /// is not a delta or glossy lobe.
     #[default]
     Sppm,
-    /// Vertex connection and merging: photon merging at every camera vertex, combined with
-    /// connections, light tracing and path tracing by multiple importance sampling.
+    /// Vertex connection and merging: photon merging where SPPM gathers and at glossy vertices
+    /// before, combined with connections, light tracing and path tracing by multiple importance
+    /// sampling.
     Vcm,
 }
 

@@ -113,19 +113,20 @@ pub fn connect(
             continue;
         }
         let (bsdf, frame) = (&light.lobe.bsdf, light.lobe.frame);
+        let (light_partials, light_merged) = light.partials_seen_from(camera.merging);
         let light_end = End {
-            partials: light.partials,
+            partials: light_partials,
             forward: bsdf.pdf(frame, light.wo, -w),
             reverse: bsdf.pdf(frame, -w, light.wo),
             cos: cos_light,
-            merged: light.segments > 1,
+            merged: light_merged,
         };
         let camera_end = End {
             partials: camera.partials,
             forward: camera.bsdf.pdf(camera.frame, camera.wo, w),
             reverse: camera.bsdf.pdf(camera.frame, w, camera.wo),
             cos: cos_camera,
-            merged: true,
+            merged: camera.merging.merges(),
         };
         let weight = connection(weights, &light_end, &camera_end, distance2);
         let through = visibility(renderer, pass, (camera.p, camera.frame.ng(), scale), w, distance, stats);

@@ -1,7 +1,8 @@
 //! Camera subpaths: a camera ray per pixel followed through every bounce (Russian roulette after
 //! the third), and at each vertex whose BSDF is not a delta the estimators that meet light
-//! subpaths there: next-event estimation, connections to the pixel's light path, and merging
-//! with the pass's light vertices. Emission the path meets is weighted against them.
+//! subpaths there: next-event estimation, connections to the pixel's light path, and, up to the
+//! path's first vertex where photons are gathered (see `mis.rs`), merging with the pass's light
+//! vertices. Emission the path meets is weighted against them.
 
 use glam::Vec3;
 
@@ -9,7 +10,7 @@ use super::connect::{connect, direct_light};
 use super::finite;
 use super::light_paths::LightVertex;
 use super::merge::{CameraVertex, MergeSet};
-use super::mis::{emitter_met, Partials, PassWeights, Scatter};
+use super::mis::{emitter_met, MergeVertex, Partials, PassWeights, Scatter};
 use super::view::View;
 use super::LightSubpaths;
 use crate::geometry::offset_origin;
@@ -71,6 +72,7 @@ pub fn trace_camera_path(
     let (mut radiance, mut laplacian, mut coverage) = (SampledSpectrum::ZERO, SampledSpectrum::ZERO, 1.0);
     let mut previous: Option<Previous> = None;
     let (mut travelled, mut segments) = (0.0f32, 0u32);
+    let mut merging = MergeVertex::Ahead;
     while state.depth < MAX_DEPTH {
         stats.eye_rays += 1;
         let direction = Vec3::from(state.direction);
@@ -125,6 +127,7 @@ pub fn trace_camera_path(
         travelled = 0.0;
         segments += 1;
         state.beta *= lobe.weight;
+        merging = merging.next(bsdf.is_gathered_at());
         if !bsdf.is_delta() {
             let camera = CameraVertex {
                 p: surface.p,
@@ -135,14 +138,17 @@ pub fn trace_camera_path(
                 hero_only: state.hero_only,
                 partials,
                 segments,
+                merging,
                 media: (state.media, surface.material),
             };
             let at = (&camera, surface.scale);
             radiance += direct_light(renderer, pass, at, &mut state.rng, &mut stats);
             radiance += connect(renderer, pass, weights, at, lights.path_of(pixel), MAX_DEPTH, &mut stats);
-            let (merged, merged_laplacian) = lights.merge_set.merge(weights, &camera, MAX_DEPTH);
-            radiance += merged;
-            laplacian += merged_laplacian;
+            if merging.merges() {
+                let (merged, merged_laplacian) = lights.merge_set.merge(weights, &camera, MAX_DEPTH);
+                radiance += merged;
+                laplacian += merged_laplacian;
+            }
         }
         let rng = &mut state.rng;
         let u = rng.next_2d();
@@ -164,7 +170,7 @@ pub fn trace_camera_path(
             cos_out: frame.n().dot(sample.wi).abs(),
             delta: sample.is_delta,
         };
-        partials = partials.scattered(weights, scatter, true);
+        partials = partials.scattered(weights, scatter, merging.merges());
         if segments == 1 {
             partials = partials.past_first_camera_vertex();
         }

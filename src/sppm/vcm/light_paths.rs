@@ -4,7 +4,7 @@
 
 use glam::{Vec2, Vec3, Vec3A};
 
-use super::mis::{light_traced, End, Partials, PassWeights, Scatter};
+use super::mis::{light_traced, End, LightPartials, MergeVertex, Partials, PassWeights, Scatter};
 use super::view::View;
 use super::{kept, visibility};
 use crate::geometry::offset_origin;
@@ -30,7 +30,7 @@ pub struct LightVertex {
     /// The path carries its hero wavelength alone.
     pub hero_only: bool,
     /// The MIS sums at the vertex.
-    pub partials: Partials,
+    pub partials: LightPartials,
     /// Segments from the light.
     pub segments: u32,
     /// The largest coordinate of its triangle (for offsetting rays that leave it).
@@ -51,6 +51,12 @@ impl LightVertex {
     /// shading normal tilted from the geometric one would otherwise leak light through).
     pub fn reaches(&self, w: Vec3) -> bool {
         self.lobe.bsdf.leaves_toward(self.lobe.frame.ng(), self.wo, w)
+    }
+
+    /// The sums at the vertex for a technique whose camera side is at `camera` against the vertex
+    /// it merges at, and whether merging here takes part.
+    pub fn partials_seen_from(&self, camera: MergeVertex) -> (Partials, bool) {
+        self.partials.seen_from(camera, self.lobe.bsdf.is_gathered_at(), self.segments > 1)
     }
 }
 
@@ -73,7 +79,7 @@ struct Walk {
     direction: Vec3A,
     throughput: SampledSpectrum,
     hero_only: bool,
-    partials: Partials,
+    partials: LightPartials,
     /// The light it left and the point it left from (next-event estimation's density of that
     /// point from the first vertex completes the sums).
     light: (usize, Vec3),
@@ -134,11 +140,12 @@ pub fn trace_light_path(
         }
         let n = lobe.frame.n();
         let distance = (!walk.from_distance || walk.segments > 0).then_some(walk.travelled);
-        walk.partials = walk.partials.arrived(distance, n.dot(wo));
+        walk.partials = walk.partials.map(|p| p.arrived(distance, n.dot(wo)));
         if walk.segments == 0 {
             let (light, q) = walk.light;
             let direct = scene.lights[light].direct_density(surface.p, q, walk.direction.into());
-            walk.partials = walk.partials.chosen_at(renderer.light_probability(surface.p, n, light) * direct);
+            let direct = renderer.light_probability(surface.p, n, light) * direct;
+            walk.partials = walk.partials.map(|p| p.chosen_at(direct));
             if let Some(soft) = walk.soft_falloff {
                 walk.throughput *= soft.at(surface.p);
             }
@@ -180,7 +187,7 @@ pub fn trace_light_path(
         let reverse = if sample.is_delta { sample.pdf } else { bsdf.pdf(lobe.frame, sample.wi, wo) };
         let scatter =
             Scatter { forward: sample.pdf, reverse, cos_out: n.dot(sample.wi).abs(), delta: sample.is_delta };
-        walk.partials = walk.partials.scattered(weights, scatter, walk.segments > 1);
+        walk.partials = walk.partials.scattered(weights, scatter, bsdf.is_gathered_at(), walk.segments > 1);
         if !walk.hero_only && material.separates_wavelengths(&bsdf) {
             walk.throughput = hero_only(walk.throughput);
             walk.hero_only = true;
@@ -202,13 +209,13 @@ fn start(renderer: &Renderer, pass: &PassSamples, weights: &PassWeights, k: u64)
     let source = &renderer.scene.lights[light];
     let emitted = source.emit_photon(rng.next_2d(), rng.next_2d(), &pass.wavelengths)?;
     let density = source.emission_density(emitted.origin, emitted.direction)?;
-    let partials = Partials::leaving_light(
+    let partials = LightPartials::new(Partials::leaving_light(
         weights,
         density.emission * p_light,
         density.cos,
         density.delta,
         density.finite,
-    );
+    ));
     Some(Walk {
         origin: emitted.origin.into(),
         direction: emitted.direction.into(),
@@ -255,7 +262,8 @@ fn to_camera(
     // The camera's density of the vertex per area, in pixels.
     let camera_area = landing.pdf * cos_here / (landing.distance * landing.distance);
     let reverse = vertex.lobe.bsdf.pdf(vertex.lobe.frame, toward, vertex.wo);
-    let end = End { partials: vertex.partials, forward: 0.0, reverse, cos: cos_here, merged: true };
+    let (partials, merged) = vertex.partials_seen_from(MergeVertex::Ahead);
+    let end = End { partials, forward: 0.0, reverse, cos: cos_here, merged };
     let weight = light_traced(weights, &end, camera_area);
     let at = (vertex.p, vertex.lobe.frame.ng(), vertex.scale);
     let through = visibility(renderer, pass, at, toward, landing.distance, stats);

@@ -9,7 +9,7 @@ use std::f32::consts::FRAC_1_PI;
 use std::sync::Arc;
 
 use super::light_paths::{joined, LightVertex};
-use super::mis::{merging, Partials, PassWeights};
+use super::mis::{merging, LightPartials, MergeVertex, Partials, PassWeights};
 use crate::materials::{Bsdf, ShadingFrame};
 use crate::scene::OpenEdges;
 use crate::spectrum::SampledSpectrum;
@@ -24,7 +24,7 @@ struct Arrival {
     ng: Vec3,
     throughput: SampledSpectrum,
     hero_only: bool,
-    partials: Partials,
+    partials: LightPartials,
     segments: u32,
 }
 
@@ -56,6 +56,8 @@ pub struct CameraVertex<'a> {
     pub partials: Partials,
     /// Segments from the camera.
     pub segments: u32,
+    /// Where it lies against the vertex its path merges at.
+    pub merging: MergeVertex,
     /// The volumes the camera path arrived in, and the material of the surface (for what a
     /// segment leaving the vertex runs through).
     pub media: (Media, u32),
@@ -124,7 +126,12 @@ impl MergeSet {
                     return;
                 }
                 let Some((f, forward, reverse)) = shading.toward(camera, light.wi) else { return };
-                let weight = merging(weights, &light.partials, &camera.partials, forward, reverse);
+                let light_partials = match camera.merging {
+                    // Light vertices before a gathering vertex do not merge.
+                    MergeVertex::Here => &light.partials.none,
+                    _ => &light.partials.last,
+                };
+                let weight = merging(weights, light_partials, &camera.partials, forward, reverse);
                 let value =
                     joined(camera.beta, camera.hero_only, light.throughput, light.hero_only) * f * weight;
                 if !value.is_finite() {

@@ -24,6 +24,16 @@
 //! ([`Partials::without_light_tracing`]) and of a camera path meeting a light right after it
 //! ([`Partials::past_first_camera_vertex`]).
 //!
+//! Merging stops where SPPM gathers: a camera path merges at its vertices up to its first where
+//! photons are gathered ([`crate::materials::Bsdf::is_gathered_at`]: not a delta, a metal or a
+//! narrow specular layer), glossy ones before it too, and at none past it ([`MergeVertex`]); so a
+//! path is merged only at vertices with no gathering vertex between them and the camera, and each
+//! light subpath carries its sums two ways to say which of its vertices those are
+//! ([`LightPartials`]). Merging at every vertex, as Georgiev et al. do, let rare camera paths
+//! find a caustic's dense photons a bounce away (the caustic box's ceiling, lit by the caustic
+//! under its ball): a whole disc of photons at once, which weights made of densities per path do
+//! not see as the jackpot it is. MEASURED
+//!
 //! Densities are of the hero wavelength's BSDF (every technique uses the same ones, so the
 //! weights of a path still sum to one), and leave Russian roulette out (every technique leaves it
 //! out alike).
@@ -175,6 +185,80 @@ impl Partials {
     }
 }
 
+/// Where a camera vertex lies on its path against the path's first vertex where photons are
+/// gathered ([`crate::materials::Bsdf::is_gathered_at`]), as SPPM's visible point: the path
+/// merges at every vertex up to that one (glossy ones before it too) and at none past it.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum MergeVertex {
+    /// Before it (or the path has none): the vertex merges, and so do light vertices met here.
+    Ahead,
+    /// It is this one: the vertex merges, and light vertices met here do not.
+    Here,
+    /// Past it: nothing merges here.
+    Behind,
+}
+
+impl MergeVertex {
+    /// The state at the next vertex of a camera path, which gathers photons or not.
+    pub fn next(self, gathered: bool) -> Self {
+        match self {
+            MergeVertex::Ahead if gathered => MergeVertex::Here,
+            MergeVertex::Ahead => MergeVertex::Ahead,
+            _ => MergeVertex::Behind,
+        }
+    }
+
+    /// Whether a camera vertex here merges (if its lobe is not a delta).
+    pub fn merges(self) -> bool {
+        self != MergeVertex::Behind
+    }
+}
+
+/// A light subpath's sums two ways, since a path merges only at vertices with no vertex where
+/// photons are gathered between them and the camera: `none` with merging at none of its
+/// vertices so far, `last` with merging at those past its last vertex where photons are
+/// gathered, that one included (past the path's first vertex: direct light is not merged).
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
+pub struct LightPartials {
+    /// Merging at none of the subpath's vertices.
+    pub none: Partials,
+    /// Merging at its vertices from its last where photons are gathered on.
+    pub last: Partials,
+}
+
+impl LightPartials {
+    /// Both sums the same: `partials`, at a light.
+    pub fn new(partials: Partials) -> Self {
+        LightPartials { none: partials, last: partials }
+    }
+
+    /// Both sums changed alike by `change`.
+    pub fn map(self, change: impl Fn(Partials) -> Partials) -> Self {
+        LightPartials { none: change(self.none), last: change(self.last) }
+    }
+
+    /// Leaving a vertex by `scatter`, the vertex gathering photons or not (`gathered`), being
+    /// past the path's first or not (`past_first`).
+    pub fn scattered(self, pass: &PassWeights, scatter: Scatter, gathered: bool, past_first: bool) -> Self {
+        let from = if gathered { self.none } else { self.last };
+        LightPartials {
+            none: self.none.scattered(pass, scatter, false),
+            last: from.scattered(pass, scatter, past_first),
+        }
+    }
+
+    /// The sums at a light vertex (gathering photons or not: `gathered`; past its path's first or
+    /// not: `past_first`) for a technique whose camera side is at `camera`, and whether merging
+    /// at the light vertex takes part.
+    pub fn seen_from(self, camera: MergeVertex, gathered: bool, past_first: bool) -> (Partials, bool) {
+        match camera {
+            MergeVertex::Ahead if gathered => (self.none, past_first),
+            MergeVertex::Ahead => (self.last, past_first),
+            _ => (self.none, false),
+        }
+    }
+}
+
 /// The weight of a camera path meeting an emitter: `direct` the density with which next-event
 /// estimation at the vertex before would have picked the point (per area, choice included; per
 /// solid angle for distant lights), `emission` the light's density of emitting the path's last
@@ -290,6 +374,9 @@ mod tests {
         n: Vec<Vec3>,
         /// Which vertices scatter by a delta lobe (never the light's or the camera's).
         delta: Vec<bool>,
+        /// Which vertices gather photons (a camera path merges at its first), of those that are
+        /// not deltas; the others are as glossy lobes.
+        gathered: Vec<bool>,
     }
 
     /// The pass: its weights, the light's area, its choice probabilities (emission by power,
@@ -318,13 +405,14 @@ mod tests {
             self.cos(at, to) * FRAC_1_PI
         }
         /// The light subpath's sums at `v[last]`, as `light_paths.rs` carries them.
-        fn light_sums(&self, s: &Setup, last: usize) -> Partials {
+        fn light_sums(&self, s: &Setup, last: usize) -> LightPartials {
             let emission = self.cos(0, 1) * FRAC_1_PI / s.area * s.p_emit;
-            let mut sums = Partials::leaving_light(&s.pass, emission, self.cos(0, 1), false, true);
+            let leaving = Partials::leaving_light(&s.pass, emission, self.cos(0, 1), false, true);
+            let mut sums = LightPartials::new(leaving);
             for i in 1..=last {
-                sums = sums.arrived(Some(self.d2(i - 1, i).sqrt()), self.cos(i, i - 1));
+                sums = sums.map(|p| p.arrived(Some(self.d2(i - 1, i).sqrt()), self.cos(i, i - 1)));
                 if i == 1 {
-                    sums = sums.chosen_at(s.p_nee / s.area);
+                    sums = sums.map(|p| p.chosen_at(s.p_nee / s.area));
                 }
                 if i < last {
                     let scatter = Scatter {
@@ -333,7 +421,7 @@ mod tests {
                         cos_out: self.cos(i, i + 1),
                         delta: self.delta[i],
                     };
-                    sums = sums.scattered(&s.pass, scatter, i > 1);
+                    sums = sums.scattered(&s.pass, scatter, self.gathered[i], i > 1);
                 }
             }
             sums
@@ -351,13 +439,19 @@ mod tests {
                         cos_out: self.cos(i, i - 1),
                         delta: self.delta[i],
                     };
-                    sums = sums.scattered(&s.pass, scatter, true);
+                    sums = sums.scattered(&s.pass, scatter, i >= self.merged_at());
                     if i == k - 1 {
                         sums = sums.past_first_camera_vertex();
                     }
                 }
             }
             sums
+        }
+        /// The camera path's first vertex that gathers photons (0 where none does): it merges
+        /// there and at every vertex before.
+        fn merged_at(&self) -> usize {
+            let k = self.p.len() - 1;
+            (1..k).rev().find(|&i| self.gathered[i]).unwrap_or(0)
         }
         /// Every technique's weight for the path.
         fn weights(&self, s: &Setup) -> Vec<(String, f32)> {
@@ -386,19 +480,26 @@ mod tests {
             }
             // Connections v[i - 1] (light) to v[i] (camera).
             for i in (2..k).filter(|&i| !self.delta[i - 1] && !self.delta[i]) {
+                let seen_from = match i.cmp(&self.merged_at()) {
+                    std::cmp::Ordering::Greater => MergeVertex::Ahead,
+                    std::cmp::Ordering::Equal => MergeVertex::Here,
+                    std::cmp::Ordering::Less => MergeVertex::Behind,
+                };
+                let light_sums = self.light_sums(s, i - 1);
+                let (partials, merged) = light_sums.seen_from(seen_from, self.gathered[i - 1], i - 1 > 1);
                 let light = End {
-                    partials: self.light_sums(s, i - 1),
+                    partials,
                     forward: self.pdf(i - 1, i),
                     reverse: self.pdf(i - 1, i - 2),
                     cos: self.cos(i - 1, i),
-                    merged: i - 1 > 1,
+                    merged,
                 };
                 let camera = End {
                     partials: self.camera_sums(s, i),
                     forward: self.pdf(i, i - 1),
                     reverse: self.pdf(i, i + 1),
                     cos: self.cos(i, i - 1),
-                    merged: true,
+                    merged: i >= self.merged_at(),
                 };
                 all.push((
                     format!("connection {i}"),
@@ -407,21 +508,25 @@ mod tests {
             }
             // Light tracing from v[k - 1], unless it is the light path's first vertex.
             let camera_area = s.camera_pdf * self.cos(k - 1, k) / self.d2(k - 1, k);
+            let light_sums = self.light_sums(s, k - 1);
+            let (partials, merged) = light_sums.seen_from(MergeVertex::Ahead, self.gathered[k - 1], k - 1 > 1);
             let light = End {
-                partials: self.light_sums(s, k - 1),
+                partials,
                 forward: 0.0,
                 reverse: self.pdf(k - 1, k - 2),
                 cos: self.cos(k - 1, k),
-                merged: k - 1 > 1,
+                merged,
             };
             if !self.delta[k - 1] && k - 1 > 1 {
                 all.push(("light traced".into(), light_traced(&s.pass, &light, camera_area)));
             }
-            // Merging at each inner vertex but the first (direct light is not merged).
-            for i in (2..k).filter(|&i| !self.delta[i]) {
+            // Merging where the camera path merges, but at the light path's first vertex (direct
+            // light is not merged).
+            for i in (2..k).filter(|&i| !self.delta[i] && i >= self.merged_at()) {
+                let light_sums = self.light_sums(s, i);
                 let w = merging(
                     &s.pass,
-                    &self.light_sums(s, i),
+                    if self.gathered[i] { &light_sums.none } else { &light_sums.last },
                     &self.camera_sums(s, i),
                     self.pdf(i, i - 1),
                     self.pdf(i, i + 1),
@@ -448,14 +553,16 @@ mod tests {
     #[test]
     fn every_techniques_weight_sums_to_one_along_random_paths() {
         let mut rng = Lcg(7);
-        let mut with_delta = 0;
+        let (mut with_delta, mut with_glossy) = (0, 0);
         for trial in 0..400 {
             let k = 2 + trial % 6;
             let p: Vec<Vec3> = (0..=k).map(|_| rng.vec()).collect();
             let n: Vec<Vec3> = (0..=k).map(|_| rng.vec().normalize()).collect();
             let delta: Vec<bool> = (0..=k).map(|i| i > 0 && i < k && rng.next() < 0.3).collect();
+            let gathered: Vec<bool> = delta.iter().map(|&d| !d && rng.next() < 0.7).collect();
             with_delta += usize::from(delta.contains(&true));
-            let path = Path { p, n, delta };
+            with_glossy += usize::from((1..k).any(|i| !delta[i] && !gathered[i]));
+            let path = Path { p, n, delta, gathered };
             let setup = Setup {
                 pass: PassWeights::new(0.01 + 0.2 * rng.next(), 1000 + (rng.next() * 50000.0) as usize),
                 area: 0.1 + rng.next(),
@@ -469,5 +576,6 @@ mod tests {
             assert!(weights.iter().all(|(_, w)| (0.0..=1.0).contains(w)), "{weights:?}");
         }
         assert!(with_delta > 100, "only {with_delta} paths had a delta vertex");
+        assert!(with_glossy > 100, "only {with_glossy} paths had a glossy vertex");
     }
 }

@@ -2,7 +2,8 @@
 //! 2012, and Hachisuka, Pantaleoni & Jensen 2012's unified path sampling. A pass traces one light
 //! subpath per photon and one camera subpath per pixel; every path is found by every technique
 //! that can sample it (a camera path meeting an emitter, next-event estimation, connecting the
-//! two subpaths' vertices, light tracing to the camera, and merging at the pass's radius) and the
+//! two subpaths' vertices, light tracing to the camera, and merging at the pass's radius where
+//! SPPM would gather: up to the camera path's first vertex that gathers photons) and the
 //! techniques are combined by multiple importance sampling (`mis.rs`), so caustics keep photon
 //! merging's robustness and diffuse light path tracing's rate of convergence.
 //!
