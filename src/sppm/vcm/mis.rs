@@ -32,7 +32,15 @@
 //! ([`LightPartials`]). Merging at every vertex, as Georgiev et al. do, let rare camera paths
 //! find a caustic's dense photons a bounce away (the caustic box's ceiling, lit by the caustic
 //! under its ball): a whole disc of photons at once, which weights made of densities per path do
-//! not see as the jackpot it is. MEASURED
+//! not see as the jackpot it is: the caustic box's worst 1% of pixels held 62% of its error at
+//! 10 CPU s. Against merging at every vertex, VCM's relative MSE at equal CPU time (one run each,
+//! 2026-11-28, 256x192, 2 threads, the same seed): on the caustic box 2.2x lower at 10 s, 1.35x at
+//! 100 s, 1.1x at 600 s; on the glossy interior 1.4x lower at 10 s; on the many-light room 1.3x;
+//! on the glossy studio's gold sphere 5% at 10 and 60 s; on the diffuse box the same at 10 s and
+//! 3-12% higher from 30 s on (it loses merges at later bounces, whose light connections find
+//! nearly as well), for 40% more passes in the time (a merge per path, not one per vertex).
+//! Stopping at the first vertex that is not a delta instead (a metal included) made the gold
+//! sphere 5x worse: its reflection of the floor lost merging.
 //!
 //! Densities are of the hero wavelength's BSDF (every technique uses the same ones, so the
 //! weights of a path still sum to one), and leave Russian roulette out (every technique leaves it
@@ -509,7 +517,8 @@ mod tests {
             // Light tracing from v[k - 1], unless it is the light path's first vertex.
             let camera_area = s.camera_pdf * self.cos(k - 1, k) / self.d2(k - 1, k);
             let light_sums = self.light_sums(s, k - 1);
-            let (partials, merged) = light_sums.seen_from(MergeVertex::Ahead, self.gathered[k - 1], k - 1 > 1);
+            let (partials, merged) =
+                light_sums.seen_from(MergeVertex::Ahead, self.gathered[k - 1], k - 1 > 1);
             let light = End {
                 partials,
                 forward: 0.0,
