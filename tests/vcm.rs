@@ -168,13 +168,13 @@ fn assert_like_sppm(name: &str, vcm: &Image, sppm: &Image, block: usize, toleran
 }
 
 /// The diffuse box with its ceiling light replaced by `light` (a `KHR_lights_punctual` light,
-/// with the node extras `caustic`) high in the box pointing down, and its floor rough metal when
-/// `metal_floor`, written into `dir`.
+/// with the node extras `caustic`) high in the box pointing down, and its floor metal of
+/// roughness `metal_floor` if any, written into `dir`.
 fn box_lit_by(
     dir: &std::path::Path,
     light: serde_json::Value,
     caustic: serde_json::Value,
-    metal_floor: bool,
+    metal_floor: Option<f32>,
 ) -> std::path::PathBuf {
     let scene = bundled_scene("cornell_diffuse.gltf");
     std::fs::copy(scene.with_extension("bin"), dir.join("cornell_diffuse.bin")).unwrap();
@@ -196,10 +196,10 @@ fn box_lit_by(
     }));
     let lamp = nodes.len() - 1;
     doc["scenes"][0]["nodes"].as_array_mut().unwrap().push(json!(lamp));
-    if metal_floor {
+    if let Some(roughness) = metal_floor {
         let materials = doc["materials"].as_array_mut().unwrap();
         materials.push(json!({"name": "Brushed", "pbrMetallicRoughness":
-            {"baseColorFactor": [0.9, 0.9, 0.9, 1.0], "metallicFactor": 1.0, "roughnessFactor": 0.25}}));
+            {"baseColorFactor": [0.9, 0.9, 0.9, 1.0], "metallicFactor": 1.0, "roughnessFactor": roughness}}));
         let metal = materials.len() - 1;
         let mesh = doc["nodes"][index_of(&doc, "Floor")]["mesh"].as_u64().unwrap() as usize;
         for primitive in doc["meshes"][mesh]["primitives"].as_array_mut().unwrap() {
@@ -226,14 +226,14 @@ fn vcm_renders_lights_with_a_radius_as_sppm_does() {
             "soft point",
             json!({"type": "point", "intensity": 200.0, "color": [1.0, 0.9, 0.8]}),
             json!({"radius": 0.25, "soft_falloff": true}),
-            false,
+            None,
         ),
         (
             "spot over metal",
             json!({"type": "spot", "intensity": 400.0, "color": [1.0, 1.0, 1.0],
             "spot": {"innerConeAngle": 0.3, "outerConeAngle": 0.6}}),
             json!({"radius": 0.2}),
-            true,
+            Some(0.25),
         ),
     ];
     for (name, light, caustic, metal_floor) in lights {
@@ -247,6 +247,29 @@ fn vcm_renders_lights_with_a_radius_as_sppm_does() {
         };
         assert_like_sppm(name, &render_by(Method::Vcm), &render_by(Method::Sppm), 16, 0.04);
     }
+}
+
+/// Light leaves a rough metal as a camera path sees it, and a camera path merges through it to
+/// the first surface that gathers photons. The diffuse box lit from its ceiling by a spot, over a
+/// metal floor of roughness 1 (never gathered at; its multiple-scattering compensation, not
+/// reciprocal, is the largest there), rendered by VCM equals SPPM's image at 64x48 after 512
+/// passes each: the means within 1% and every 16x16 block within 4% (measured: mean +0.56%,
+/// blocks within 1.0%). Before light paths and photons took the compensation of the direction
+/// they leave toward, VCM's mean was 1.7% above SPPM's here (and, by hand, 2.4% above a path
+/// tracer's in a furnace of the same metal, where it is now within 0.02%).
+#[test]
+fn vcm_sees_light_leave_a_rough_metal_as_sppm_does() {
+    let dir = tempfile::tempdir().unwrap();
+    let spot = json!({"type": "spot", "intensity": 400.0, "color": [1.0, 1.0, 1.0],
+        "spot": {"innerConeAngle": 0.3, "outerConeAngle": 0.6}});
+    let scene = box_lit_by(dir.path(), spot, json!({}), Some(1.0));
+    let render_by = |method| {
+        let mut s = settings(&scene, dir.path(), 512);
+        s.resolution = Some([64, 48]);
+        s.method = method;
+        render(&s, 2)
+    };
+    assert_like_sppm("rough metal floor", &render_by(Method::Vcm), &render_by(Method::Sppm), 16, 0.04);
 }
 
 /// Light tracing reaches a thin lens: a light vertex lands on the film through a uniform point of

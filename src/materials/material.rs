@@ -110,9 +110,20 @@ pub struct Lobe {
 
 impl Lobe {
     /// For a photon that arrived from `wo` and scatters toward `wi`: the factor on its flux
-    /// beyond the sample's weight (1 but under a layer: [`Over::importance_correction`]).
-    pub fn importance_correction(&self, wo: Vec3, wi: Vec3) -> f32 {
-        self.over.iter().flatten().map(|layer| layer.importance_correction(wo, wi)).product()
+    /// beyond the sample's weight, and on the BSDF evaluated for it. It is 1 but under a layer
+    /// ([`Over::importance_correction`]) and on a rough metal, whose multiple-scattering
+    /// compensation (Cycles' Multiscatter GGX, not reciprocal) is that of the direction the
+    /// light leaves toward, as a camera path meeting the metal sees it: `wi` here, not the `wo`
+    /// the lobe was resolved for.
+    pub fn importance_correction(&self, wo: Vec3, wi: Vec3) -> SampledSpectrum {
+        let layers: f32 =
+            self.over.iter().flatten().map(|layer| layer.importance_correction(wo, wi)).product();
+        match self.bsdf {
+            Bsdf::RoughConductor { f0, alpha, scale } => {
+                conductor::multiple_scattering(f0, alpha, self.frame.n().dot(wi).abs()) / scale * layers
+            }
+            _ => SampledSpectrum::splat(layers),
+        }
     }
 }
 
@@ -470,6 +481,39 @@ impl Material {
             (true, _) => Bsdf::RoughThinDielectric { ior, alpha, tint, depth: depth() },
             (false, 0.0) => Bsdf::Dielectric { ior, tint: tint.sqrt() },
             (false, _) => Bsdf::RoughDielectric { ior, alpha, tint: tint.sqrt() },
+        }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// A photon leaves a rough metal as a camera path there sees the light: the lobe resolved
+    /// for a photon arriving from `l`, evaluated toward `v` with its importance correction,
+    /// equals the lobe resolved for a camera at `v` evaluated for light from `l` (the multiple-
+    /// scattering compensation is the viewer's direction's, as in Cycles). Without the
+    /// correction they differ by up to 88% at roughness 1 and 11% at roughness 0.3.
+    #[test]
+    fn a_photon_leaves_a_rough_metal_as_a_camera_path_sees_it() {
+        let frame = ShadingFrame::new(Vec3::Z, Vec3::Z);
+        let f0 = Vec4::new(0.9, 0.6, 0.3, 0.8);
+        let lobe_for = |alpha: f32, wo: Vec3| Lobe {
+            frame,
+            bsdf: Bsdf::RoughConductor { f0, alpha, scale: conductor::multiple_scattering(f0, alpha, wo.z) },
+            weight: 1.0,
+            over: [None; 2],
+        };
+        for alpha in [0.09, 0.36, 1.0] {
+            for (l, v) in [(0.1, 0.9), (0.95, 0.2), (0.5, 0.5), (0.05, 0.05)] {
+                let l = Vec3::new((1.0f32 - l * l).sqrt(), 0.0, l);
+                let v = Vec3::new(-(1.0f32 - v * v).sqrt() * 0.6, (1.0f32 - v * v).sqrt() * 0.8, v);
+                let camera = lobe_for(alpha, v).bsdf.eval(frame, v, l);
+                let photon = lobe_for(alpha, l);
+                let leaving = photon.bsdf.eval(frame, v, l) * photon.importance_correction(l, v);
+                let off = (leaving / camera - Vec4::ONE).abs().max_element();
+                assert!(off < 1e-5, "alpha {alpha}, l {l}, v {v}: photon {leaving}, camera {camera}");
+            }
         }
     }
 }
