@@ -57,18 +57,30 @@ impl Coat {
         self.mix(self.tables().at(mu))
     }
 
-    /// The share of light the coat lets through to the base and back, from cosine `mu_i` to
-    /// `mu_o`: `(1 - E(wo)) (1 - E(wi)) / (1 - E_avg)`.
-    fn through(&self, mu_o: f32, mu_i: f32) -> SampledSpectrum {
+    /// The coat seen at cosine `mu_o`: its tables and albedo there, found once for all a BSDF
+    /// call reads of them.
+    fn seen_at(&self, mu_o: f32) -> SeenCoat {
         let tables = self.tables();
-        let entering = (Vec4::ONE - self.mix(tables.means)).max(Vec4::splat(1e-4));
-        (Vec4::ONE - self.mix(tables.at(mu_o))) * (Vec4::ONE - self.mix(tables.at(mu_i))) / entering
+        SeenCoat { albedo: self.mix(tables.at(mu_o)), tables }
+    }
+
+    /// The share of light the coat seen as `seen` lets through to the base and back, from cosine
+    /// `mu_i`: `(1 - E(wo)) (1 - E(wi)) / (1 - E_avg)`.
+    fn through(&self, seen: &SeenCoat, mu_i: f32) -> SampledSpectrum {
+        let entering = (Vec4::ONE - self.mix(seen.tables.means)).max(Vec4::splat(1e-4));
+        (Vec4::ONE - seen.albedo) * (Vec4::ONE - self.mix(seen.tables.at(mu_i))) / entering
     }
 
     /// `f0 E1 + (1 - f0) Es` for the pair `e = (E1, Es)`.
     fn mix(&self, e: Vec2) -> SampledSpectrum {
         self.f0 * e.x + (Vec4::ONE - self.f0) * e.y
     }
+}
+
+/// A coat seen from one direction: its albedo tables, and its albedo toward that direction.
+struct SeenCoat {
+    tables: LayerAlbedo,
+    albedo: SampledSpectrum,
 }
 
 /// A Lambertian base under a coat (the coat's own reflection left out when it is smooth).
@@ -109,21 +121,25 @@ impl Plastic {
 
     /// The base's reflection for local `wo` and `wi` above the surface (`wo` may lie below a
     /// bent normal, which reflects the base alone: see `normal_map.rs`).
-    fn base_value(&self, wo: Vec3, wi: Vec3) -> SampledSpectrum {
-        self.base * FRAC_1_PI * self.coat.through(wo.z.abs(), wi.z)
+    fn base_value(&self, seen: &SeenCoat, wi: Vec3) -> SampledSpectrum {
+        self.base * FRAC_1_PI * self.coat.through(seen, wi.z)
+    }
+
+    /// The coat seen from local `wo` (below a bent normal, from its mirror image).
+    fn seen_from(&self, wo: Vec3) -> SeenCoat {
+        self.coat.seen_at(wo.z.abs())
     }
 
     /// The probability of sampling the coat, by its share of the light reflected toward `wo`
     /// (0 below the shading normal, where the coat reflects nothing).
-    fn coat_probability(&self, mu_o: f32) -> f32 {
+    fn coat_probability(&self, seen: &SeenCoat, mu_o: f32) -> f32 {
         if !self.has_rough_coat() || mu_o <= 0.0 {
             return 0.0;
         }
         if self.base == Vec4::ZERO {
             return 1.0;
         }
-        let coat = self.coat.albedo(mu_o);
-        share(coat, self.base * (Vec4::ONE - coat)).clamp(0.1, 0.9)
+        share(seen.albedo, self.base * (Vec4::ONE - seen.albedo)).clamp(0.1, 0.9)
     }
 
     /// `f(wo, wi)` in `frame`, light arriving from `wi` (the base's share shadowed by a normal
@@ -133,7 +149,7 @@ impl Plastic {
         if wi_local.z <= 0.0 {
             return Vec4::ZERO;
         }
-        self.base_value(wo_local, wi_local) * frame.diffuse_shadowing(wi)
+        self.base_value(&self.seen_from(wo_local), wi_local) * frame.diffuse_shadowing(wi)
             + self.coat_value(wo_local, wi_local)
     }
 
@@ -151,14 +167,17 @@ impl Plastic {
     /// side ([`ShadingFrame::toward`]).
     pub fn pdf(&self, n: Vec3, wo: Vec3, wi: Vec3) -> f32 {
         let (wo, wi, _) = microfacet::to_frame(n, wo, wi);
-        self.local_pdf(wo, wi)
-    }
-
-    fn local_pdf(&self, wo: Vec3, wi: Vec3) -> f32 {
         if wi.z <= 0.0 {
             return 0.0;
         }
-        let p = self.coat_probability(wo.z);
+        self.local_pdf(&self.seen_from(wo), wo, wi)
+    }
+
+    fn local_pdf(&self, seen: &SeenCoat, wo: Vec3, wi: Vec3) -> f32 {
+        if wi.z <= 0.0 {
+            return 0.0;
+        }
+        let p = self.coat_probability(seen, wo.z);
         let coat = if p > 0.0 { p * microfacet::reflection_pdf(self.coat.alpha, wo, wi) } else { 0.0 };
         coat + (1.0 - p) * wi.z * FRAC_1_PI
     }
@@ -175,7 +194,8 @@ impl Plastic {
         mode: Transport,
     ) -> Option<BsdfSample> {
         let (wo_local, _, [t, b, n]) = microfacet::to_frame(frame.toward(wo), wo, wo);
-        let wi_local = if u_lobe < self.coat_probability(wo_local.z) {
+        let seen = self.seen_from(wo_local);
+        let wi_local = if u_lobe < self.coat_probability(&seen, wo_local.z) {
             microfacet::sample_reflection(self.coat.alpha, wo_local, u)?.wi
         } else {
             square_to_cosine_hemisphere(u)
@@ -184,12 +204,13 @@ impl Plastic {
         // Density and value from the world direction, as `eval` and `pdf` compute them: a narrow
         // lobe's peak would otherwise differ by rounding between the two.
         let (wo_local, wi_local, _) = microfacet::to_frame(n, wo, wi);
-        let pdf = self.local_pdf(wo_local, wi_local);
+        let seen = self.seen_from(wo_local);
+        let pdf = self.local_pdf(&seen, wo_local, wi_local);
         if pdf <= 0.0 {
             return None;
         }
         let light_side = if mode == Transport::Radiance { wi } else { wo };
-        let base = self.base_value(wo_local, wi_local) * frame.diffuse_shadowing(light_side);
+        let base = self.base_value(&seen, wi_local) * frame.diffuse_shadowing(light_side);
         let f = base + self.coat_value(wo_local, wi_local);
         Some(BsdfSample { wi, weight: f * wi_local.z / pdf, pdf, is_delta: false })
     }
