@@ -66,7 +66,7 @@ pub fn eta_of_f0(f0: f32) -> f32 {
 
 impl Tables {
     /// The tables, their roughness rows shared among as many threads as the render's pool has (a
-    /// million samples of 17 Fresnel terms each: 0.2 s on one core, paid by every render of a
+    /// million samples of 17 Fresnel terms each: 0.14 s on one core, paid by every render of a
     /// scene with a glTF dielectric or a rough metal). Plain threads, not the pool's: a pool worker
     /// waiting for a row could take up render work that reads the tables being built.
     fn compute() -> Self {
