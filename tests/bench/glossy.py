@@ -28,6 +28,7 @@ import resource
 import subprocess
 import sys
 import tempfile
+import time
 
 ROOT = pathlib.Path(__file__).resolve().parents[2]
 os.environ["HOME"] = tempfile.mkdtemp(prefix="caustic-glossy-home-")
@@ -153,14 +154,16 @@ def main():
                  for name, (binary, method) in binaries.items()}
         row = {"cpu_s_budget": budget}
         for name, run in runs.items():
-            errors, cpus = [], []
+            errors, cpus, walls = [], [], []
             for seed in range(1, args.seeds + 1):
                 folder = out / (f"{name}_{budget:g}s" + (f"_seed{seed}" if args.seeds > 1 else ""))
                 folder.mkdir(exist_ok=True)
-                cpus.append(run(folder, seed))
+                start = time.perf_counter()
+                cpus.append(round(run(folder, seed), 1))
+                walls.append(round(time.perf_counter() - start, 1))
                 errors.append(relative_mse(folder / "frame_0001.exr", references[name], mask))
             error = float(np.mean(errors))
-            row[name] = {"relative_mse": error, "per_seed": errors, "cpu_s": [round(c, 1) for c in cpus]}
+            row[name] = {"relative_mse": error, "per_seed": errors, "cpu_s": cpus, "wall_s": walls}
             spread = f" (seeds {min(errors):.3e} .. {max(errors):.3e})" if args.seeds > 1 else ""
             print(f"{budget:g} CPU s: {name} relative MSE {error:.3e}{spread} ({np.mean(cpus):.1f} CPU s)", flush=True)
         for method in args.methods:
