@@ -156,6 +156,17 @@ impl PixelSampler {
     pub fn next_2d(&mut self) -> Vec2 {
         Vec2::new(self.next_1d(), self.next_1d())
     }
+
+    /// The stream of branch `branch` (from 1) of a path split where this stream stands: point
+    /// `pass` of a Sobol sequence of its own from its first dimension (stratified over passes,
+    /// independent of this stream's), then numbers of its own.
+    pub fn branch(&self, branch: u32) -> PixelSampler {
+        let key = mix(u64::from(self.sobol.seed) << 32 ^ u64::from(branch) ^ 0x6272_616e_6368);
+        let sobol =
+            SobolPrefix { seed: mix(key) as u32, index: self.sobol.index, next_dimension: 0, four: [0.0; 4] };
+        let rest = Sampler { pcg: Pcg32::new(mix(key ^ u64::from(self.sobol.index)), key | 1) };
+        PixelSampler { sobol, rest }
+    }
 }
 
 /// The pass's point of the golden-ratio (Kronecker) sequence, rotated by the seed: stratified over
@@ -357,6 +368,23 @@ mod tests {
             assert!(strata.iter().all(|&n| n == 1), "pixel {pixel}: {strata:?}");
         }
         assert_ne!(pixel_stream(5, 3, 0).next_2d(), pixel_stream(5, 3, 1).next_2d());
+    }
+
+    /// A branch's stream starts a Sobol sequence of its own: its first two dimensions fill all
+    /// 16 x 16 strata over 256 passes, and differ from its parent's and from another branch's.
+    #[test]
+    fn a_branchs_samples_are_stratified_over_passes_on_their_own() {
+        let mut strata = [0u32; 256];
+        for pass in 0..256 {
+            let mut parent = pixel_stream(5, pass, 7);
+            parent.next_2d();
+            parent.next_1d();
+            let u = parent.branch(1).next_2d();
+            strata[(u.y * 16.0) as usize * 16 + (u.x * 16.0) as usize] += 1;
+            assert_ne!(u, parent.next_2d());
+            assert_ne!(u, parent.branch(2).next_2d());
+        }
+        assert!(strata.iter().all(|&n| n == 1), "{strata:?}");
     }
 
     /// The inline sine and cosine agree with libm's to 2e-7 over their quarter turn.

@@ -7,6 +7,9 @@
 //! techniques are combined by multiple importance sampling (`mis.rs`), so caustics keep photon
 //! merging's robustness and diffuse light path tracing's rate of convergence.
 //!
+//! A camera path splits in two at its first glossy vertex, up to the vertex where it gathers
+//! (`eye_paths.rs`).
+//!
 //! The stages: light subpaths (`light_paths.rs`, which also traces light to the camera), the
 //! light vertices bucketed for merging (`merge.rs`), and camera subpaths (`eye_paths.rs`) whose
 //! vertices run the estimators (`connect.rs`, `merge.rs`). A pass depends only on (scene,
