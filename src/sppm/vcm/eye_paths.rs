@@ -78,7 +78,7 @@ struct Previous {
 
 /// A camera path (or a branch of one) between vertices: its state, its MIS sums, the vertex it
 /// left, the distance since it, its segments, where it stands against its merging vertex, and
-/// whether it has split.
+/// its part in the split at its first glossy vertex.
 #[derive(Clone)]
 struct Walk {
     state: EyeState,
@@ -87,11 +87,31 @@ struct Walk {
     travelled: f32,
     segments: u32,
     merging: MergeVertex,
-    split: bool,
-    /// The walk is a branch, which ends at the vertex where it gathers.
-    branch: bool,
-    /// What its estimates count for.
-    scale: f32,
+    part: Part,
+}
+
+/// A walk's part in the split at its path's first glossy vertex.
+#[derive(Clone, Copy, PartialEq)]
+enum Part {
+    /// The path has not split yet.
+    Unsplit,
+    /// The path, between the split and the vertex where it gathers: its estimates there count
+    /// for a share, its branches' for the rest.
+    Shared,
+    /// The path, past the vertex where it gathers: its estimates count whole again.
+    Past,
+    /// A branch, which ends at the vertex where it gathers.
+    Branch,
+}
+
+impl Part {
+    /// What a walk's estimates count for.
+    fn scale(self) -> f32 {
+        match self {
+            Part::Shared | Part::Branch => 1.0 / GLOSSY_BRANCHES as f32,
+            Part::Unsplit | Part::Past => 1.0,
+        }
+    }
 }
 
 /// Traces pixel `pixel`'s camera path for `pass`.
@@ -111,9 +131,7 @@ pub fn trace_camera_path(
         travelled: 0.0,
         segments: 0,
         merging: MergeVertex::Ahead,
-        split: false,
-        branch: false,
-        scale: 1.0,
+        part: Part::Unsplit,
     };
     let mut estimate =
         PixelEstimate { radiance: SampledSpectrum::ZERO, laplacian: SampledSpectrum::ZERO, coverage: 1.0 };
@@ -150,6 +168,7 @@ fn walk_camera_path(
     let scene = renderer.scene;
     let lambda = &pass.wavelengths;
     while walk.state.depth < MAX_DEPTH {
+        let scale = walk.part.scale();
         let state = &mut walk.state;
         stats.eye_rays += 1;
         let direction = Vec3::from(state.direction);
@@ -157,8 +176,7 @@ fn walk_camera_path(
         if !scene.sphere_lights.is_empty() {
             let segment = (walk.travelled, hit.map_or(f32::INFINITY, |h| h.t));
             estimate.radiance +=
-                finite(spheres_met(renderer, pass, (state, &walk.partials, walk.previous), segment))
-                    * walk.scale;
+                finite(spheres_met(renderer, pass, (state, &walk.partials, walk.previous), segment)) * scale;
         }
         let Some(hit) = hit else {
             if state.camera_ray && scene.transparent_film {
@@ -166,7 +184,7 @@ fn walk_camera_path(
             } else if !(renderer.has_volumes && state.media.medium(scene).is_some()) {
                 estimate.radiance +=
                     finite(state.beta * escaped(renderer, pass, &walk.partials, walk.previous, direction))
-                        * walk.scale;
+                        * scale;
             }
             return;
         };
@@ -190,7 +208,7 @@ fn walk_camera_path(
                     }
                     _ => 1.0,
                 };
-                estimate.radiance += finite(state.beta * emitted * weight) * walk.scale;
+                estimate.radiance += finite(state.beta * emitted * weight) * scale;
             }
         }
         let lobe = material.lobe(&surface.inputs, surface.frame, wo, lambda, state.rng.next_1d());
@@ -223,28 +241,28 @@ fn walk_camera_path(
                 media: (state.media, surface.material),
             };
             let at = (&camera, surface.scale);
-            estimate.radiance += direct_light(renderer, pass, at, &mut state.rng, stats) * walk.scale;
+            estimate.radiance += direct_light(renderer, pass, at, &mut state.rng, stats) * scale;
             estimate.radiance +=
-                connect(renderer, pass, weights, at, lights.path_of(pixel), MAX_DEPTH, stats) * walk.scale;
+                connect(renderer, pass, weights, at, lights.path_of(pixel), MAX_DEPTH, stats) * scale;
             if walk.merging.merges() {
                 let (merged, merged_laplacian) = lights.merge_set.merge(weights, &camera, MAX_DEPTH);
-                estimate.radiance += merged * walk.scale;
-                estimate.laplacian += merged_laplacian * walk.scale;
+                estimate.radiance += merged * scale;
+                estimate.laplacian += merged_laplacian * scale;
             }
         }
-        if walk.split && walk.merging != MergeVertex::Ahead {
-            if walk.branch {
-                return;
+        if walk.merging != MergeVertex::Ahead {
+            match walk.part {
+                Part::Branch => return,
+                Part::Shared => walk.part = Part::Past,
+                Part::Unsplit | Part::Past => {}
             }
-            walk.scale = 1.0;
         }
         let vertex = Vertex { surface: &surface, material, frame, bsdf: &bsdf, wo };
-        if !walk.split && !bsdf.is_delta() && walk.merging == MergeVertex::Ahead {
-            walk.split = true;
-            walk.scale = 1.0 / GLOSSY_BRANCHES as f32;
+        if walk.part == Part::Unsplit && !bsdf.is_delta() && walk.merging == MergeVertex::Ahead {
+            walk.part = Part::Shared;
             for b in 1..GLOSSY_BRANCHES {
                 let mut branch = walk.clone();
-                branch.branch = true;
+                branch.part = Part::Branch;
                 branch.state.rng = walk.state.rng.branch(b);
                 if leave_vertex(renderer, weights, &mut branch, &vertex) {
                     branches.push(branch);
