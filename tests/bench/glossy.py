@@ -7,7 +7,7 @@ before a change):
     cargo build --release
     target/bpy-venv/bin/python tests/bench/glossy.py [--budgets 10,60] [--threads 2]
         [--reference-seconds 600] [--baseline path/to/caustic] [--resolution 96x72]
-        [--gold-roughness 0.3] [--methods sppm,vcm] [--seeds 1] [-o OUT]
+        [--gold-roughness 0.3] [--methods sppm,vcm] [--seeds 1] [--first-seed 1] [-o OUT]
 
 Budgets are CPU seconds (threads x wall time; both renderers get the same threads). Cycles: CPU
 device, denoising and adaptive sampling off, a 1-pixel box filter, no glossy filter, 32 bounces.
@@ -18,6 +18,9 @@ sphere's pixels (from Cycles' object-index pass, its rim left out), mean of
 (Y - Y_ref)^2 / (Y_ref^2 + f^2) with f = 1% of the reference's mean there. With `--seeds K` each
 renderer renders each budget with seeds 1..K and the figure is the mean of their errors, printed
 with the smallest and largest (one run's ratio to Cycles varied by 1.4x between two seeds at 60 s).
+`--first-seed S` starts at seed S instead (S..S+K-1), so a second run can confirm a first one with
+fresh seeds: a render with the same seed and budget differs between runs only by the few passes
+its wall time allows, so rerunning seeds 1..K is not a new sample.
 Prints the figures and writes OUT/results.json and OUT/*.exr.
 """
 import argparse
@@ -124,6 +127,7 @@ def main():
     parser.add_argument("--methods", default="sppm,vcm", type=lambda s: s.split(","),
                         help="Caustic's methods to measure, each against its own reference")
     parser.add_argument("--seeds", type=int, default=1, help="renders per renderer and budget, seeds 1..K")
+    parser.add_argument("--first-seed", type=int, default=1, help="the first seed of --seeds")
     parser.add_argument("-o", "--out", default="bench-glossy")
     args = parser.parse_args()
     out = pathlib.Path(args.out).resolve()
@@ -146,7 +150,7 @@ def main():
     mask = gold_mask(references["cycles"])
     results = {"pixels": int(mask.sum()), "resolution": list(resolution), "threads": args.threads,
                "gold_roughness": args.gold_roughness,
-               "reference_wall_s": wall, "seeds": args.seeds, "runs": []}
+               "reference_wall_s": wall, "seeds": args.seeds, "first_seed": args.first_seed, "runs": []}
     for budget in (float(b) for b in args.budgets.split(",")):
         seconds = budget / args.threads
         runs = {"cycles": lambda path, seed: cycles(scene, seconds, args.threads, path / "frame_0001.exr", seed)}
@@ -155,7 +159,7 @@ def main():
         row = {"cpu_s_budget": budget}
         for name, run in runs.items():
             errors, cpus, walls = [], [], []
-            for seed in range(1, args.seeds + 1):
+            for seed in range(args.first_seed, args.first_seed + args.seeds):
                 folder = out / (f"{name}_{budget:g}s" + (f"_seed{seed}" if args.seeds > 1 else ""))
                 folder.mkdir(exist_ok=True)
                 start = time.perf_counter()
