@@ -68,6 +68,12 @@ fn unrendered_features_are_named() {
     let paint = gltf.material(json!({"name": "Car paint",
         "extensions": {"KHR_materials_iridescence": {"iridescenceFactor": 1.0}}}));
     gltf.sphere("Body", [0.0, 0.0, 0.0], 1.0, 8, paint);
+    let neon = gltf.material(json!({"name": "Varnished neon", "emissiveFactor": [1.0, 0.2, 0.1],
+        "extensions": {"KHR_materials_clearcoat": {"clearcoatFactor": 1.0}}}));
+    gltf.sphere("Sign", [3.0, 0.0, 0.0], 0.5, 8, neon);
+    let lamp = gltf.material(json!({"name": "Lamp", "emissiveFactor": [1.0, 1.0, 1.0],
+        "extensions": {"KHR_materials_clearcoat": {"clearcoatFactor": 0.0}}}));
+    gltf.sphere("Bulb", [-3.0, 0.0, 0.0], 0.5, 8, lamp);
     let decal = gltf.material(json!({"name": "Decal", "alphaMode": "BLEND"}));
     gltf.mesh("Sticker", &[[[0.0, 0.0, 1.1], [0.2, 0.0, 1.1], [0.0, 0.2, 1.1]]], decal);
     gltf.attribute("COLOR_0", &[[1.0f32, 1.0, 1.0, 0.5]; 3].concat(), 4, "VEC4");
@@ -79,7 +85,11 @@ fn unrendered_features_are_named() {
     assert!(output.status.success(), "{stderr}");
     let expected = "material 'Car paint': KHR_materials_iridescence is not rendered";
     assert!(stderr.contains(expected), "no '{expected}' in:\n{stderr}");
-    // The decal's vertex alpha is rendered, so nothing is said of it.
+    let expected =
+        "material 'Varnished neon': its emission is not dimmed by the coat over it, as Cycles dims it";
+    assert!(stderr.contains(expected), "no '{expected}' in:\n{stderr}");
+    // A coat of factor 0 is no coat; the decal's vertex alpha is rendered: nothing is said of them.
+    assert!(!stderr.contains("Lamp"), "{stderr}");
     assert!(!stderr.contains("Sticker") && !stderr.contains("Decal"), "{stderr}");
 }
 

@@ -32,6 +32,7 @@ pub fn material_warnings(m: &gltf::Material) -> Vec<String> {
     unrendered.extend(unrendered_textures(m));
     unrendered.extend(unrendered_volume(m));
     unrendered.extend(unrendered_medium(m));
+    unrendered.extend(unrendered_layered_emission(m));
     unrendered.into_iter().map(|what| format!("material '{name}': {what}")).collect()
 }
 
@@ -84,6 +85,31 @@ fn unrendered_medium(m: &gltf::Material) -> Vec<String> {
         );
     }
     unrendered
+}
+
+/// Emission under a coat or a sheen: Cycles' Principled BSDF puts emission beneath both layers,
+/// which dim it as they reflect, and Caustic adds it on top of them undimmed.
+fn unrendered_layered_emission(m: &gltf::Material) -> Option<String> {
+    let emits = m.emissive_factor().iter().any(|&c| c > 0.0) && m.emissive_strength().unwrap_or(1.0) > 0.0;
+    if !emits {
+        return None;
+    }
+    // A factor (or any channel of a colour factor) above 0: the layer is there.
+    let present = |extension: &str, key: &str| {
+        let positive = |v: &serde_json::Value| v.as_f64().is_some_and(|v| v > 0.0);
+        m.extension_value(extension)
+            .is_some_and(|e| positive(&e[key]) || e[key].as_array().is_some_and(|a| a.iter().any(positive)))
+    };
+    let layers = match (
+        present("KHR_materials_clearcoat", "clearcoatFactor"),
+        present("KHR_materials_sheen", "sheenColorFactor"),
+    ) {
+        (true, true) => "the coat and the sheen",
+        (true, false) => "the coat",
+        (false, true) => "the sheen",
+        (false, false) => return None,
+    };
+    Some(format!("its emission is not dimmed by {layers} over it, as Cycles dims it"))
 }
 
 /// The textures of `m` that are not read: those on a texture coordinate set Caustic does not
