@@ -106,8 +106,11 @@ pub fn load(path: &Path) -> Result<Description, SceneError> {
     let animations =
         pointers::read(&document, &buffers, &pointer_channels, &scene_extras.tracks).map_err(fail)?;
     let rig = rig(&document, &buffers, &animations.nodes).map_err(fail)?;
-    let mut unrendered: Vec<String> =
-        document.materials().flat_map(|m| gltf_unrendered::material_warnings(&m)).collect();
+    let mut unrendered: Vec<String> = document
+        .materials()
+        .zip(&materials)
+        .flat_map(|(m, loaded)| gltf_unrendered::material_warnings(&m, loaded))
+        .collect();
     unrendered.extend(animations.warnings.iter().cloned());
     let mut builder = Builder {
         document: &document,

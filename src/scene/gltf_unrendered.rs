@@ -5,6 +5,7 @@
 //! Occlusion textures are not light transport and are ignored without a warning.
 
 use super::gltf_textures::{info_set, normal_set, raw_info_set};
+use crate::materials::Material;
 use crate::texture::UV_SETS;
 
 /// Material extensions Caustic renders.
@@ -19,8 +20,8 @@ const RENDERED_MATERIAL_EXTENSIONS: &[&str] = &[
     "KHR_materials_volume",
 ];
 
-/// One line for each thing in material `m` that is not rendered.
-pub fn material_warnings(m: &gltf::Material) -> Vec<String> {
+/// One line for each thing in material `m` (resolved as `loaded`) that is not rendered.
+pub fn material_warnings(m: &gltf::Material, loaded: &Material) -> Vec<String> {
     let name = m.name().unwrap_or("unnamed");
     let mut unrendered: Vec<String> = m
         .extensions()
@@ -32,7 +33,7 @@ pub fn material_warnings(m: &gltf::Material) -> Vec<String> {
     unrendered.extend(unrendered_textures(m));
     unrendered.extend(unrendered_volume(m));
     unrendered.extend(unrendered_medium(m));
-    unrendered.extend(unrendered_layered_emission(m));
+    unrendered.extend(unrendered_layered_emission(loaded));
     unrendered.into_iter().map(|what| format!("material '{name}': {what}")).collect()
 }
 
@@ -89,21 +90,11 @@ fn unrendered_medium(m: &gltf::Material) -> Vec<String> {
 
 /// Emission under a coat or a sheen: Cycles' Principled BSDF puts emission beneath both layers,
 /// which dim it as they reflect, and Caustic adds it on top of them undimmed.
-fn unrendered_layered_emission(m: &gltf::Material) -> Option<String> {
-    let emits = m.emissive_factor().iter().any(|&c| c > 0.0) && m.emissive_strength().unwrap_or(1.0) > 0.0;
-    if !emits {
+fn unrendered_layered_emission(m: &Material) -> Option<String> {
+    if m.emission.is_none() {
         return None;
     }
-    // A factor (or any channel of a colour factor) above 0: the layer is there.
-    let present = |extension: &str, key: &str| {
-        let positive = |v: &serde_json::Value| v.as_f64().is_some_and(|v| v > 0.0);
-        m.extension_value(extension)
-            .is_some_and(|e| positive(&e[key]) || e[key].as_array().is_some_and(|a| a.iter().any(positive)))
-    };
-    let layers = match (
-        present("KHR_materials_clearcoat", "clearcoatFactor"),
-        present("KHR_materials_sheen", "sheenColorFactor"),
-    ) {
+    let layers = match (m.clearcoat.is_some(), m.sheen.is_some()) {
         (true, true) => "the coat and the sheen",
         (true, false) => "the coat",
         (false, true) => "the sheen",
