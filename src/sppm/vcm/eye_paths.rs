@@ -1,8 +1,9 @@
 //! Camera subpaths: a camera ray per pixel followed through every bounce (Russian roulette after
-//! the third, and a quarter of paths going on past the vertex where they gather), and at each vertex whose BSDF is not a delta the estimators that meet light
-//! subpaths there: next-event estimation, connections to the pixel's light path, and, up to the
-//! path's first vertex where photons are gathered (see `mis.rs`), merging with the pass's light
-//! vertices. Emission the path meets is weighted against them.
+//! the third, and a quarter of paths going on past the vertex where they gather), and at each
+//! vertex whose BSDF is not a delta the estimators that meet light subpaths there: next-event
+//! estimation, connections to the pixel's light path, and, up to the path's first vertex where
+//! photons are gathered (see `mis.rs`), merging with the pass's light vertices. Emission the path
+//! meets is weighted against them.
 //!
 //! A path splits in two at its first glossy vertex (not a delta, before the vertex where it
 //! gathers: a metal, a rough coat), after that vertex's own estimators: a branch samples the lobe
