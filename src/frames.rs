@@ -635,8 +635,8 @@ impl Shot {
 const FRAME_BYTES_PER_PIXEL: u64 = 96;
 
 /// What a block holds per pixel for its frames together: a shared eye path with its common
-/// gather (496 bytes), its common estimate (48), its visible point bucketed (24) and the common
-/// film (64); generously.
+/// gather and every shared photon's sums (560 bytes), its common estimate (48), its visible
+/// point bucketed (16) and the common film (64); generously.
 const SHARED_BYTES_PER_PIXEL: u64 = 704;
 
 /// What one pass holds per photon path (its photons and the segments frames check), generously.

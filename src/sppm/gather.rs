@@ -235,6 +235,22 @@ impl PhotonSet {
         }
     }
 
+    /// `sums` (at `vp`, from photons that showed no wall the point lies behind) changed by this
+    /// set's photons near `vp`: a frame's differences from a common set, those it takes out
+    /// carrying their flux negated. `None` where one of them shows a wall that cuts the disc: it
+    /// may change the walls, and the point needs a gather of its own.
+    pub fn sums_changed(&self, vp: &VisiblePoint, sums: PhotonSums) -> Option<PhotonSums> {
+        let change = self.first_round(vp);
+        if change.walls.iter().any(|wall| wall.mass > 0.0) {
+            return None;
+        }
+        Some(PhotonSums {
+            kernel: (sums.kernel + change.sums.kernel).max(SampledSpectrum::ZERO),
+            laplacian: sums.laplacian + change.sums.laplacian,
+            cut: sums.cut,
+        })
+    }
+
     /// `sums` with every photon within the radius of its visible point added.
     fn weigh_near<'a>(&self, mut sums: Weigher<'a>) -> Weigher<'a> {
         let p = sums.vp.p;
@@ -253,6 +269,14 @@ pub struct FirstRound {
     sums: PhotonSums,
     walls: [Wall; 3],
     behind_a_wall: bool,
+}
+
+impl FirstRound {
+    /// Whether its photons showed a wall the point lies behind (a sum over its set then leaves
+    /// out the photons across it).
+    pub fn behind_a_wall(&self) -> bool {
+        self.behind_a_wall
+    }
 }
 
 /// What the photons of several sets of one radius (frames sharing photons add their own to the

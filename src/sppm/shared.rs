@@ -19,7 +19,11 @@
 //! and those whose visible point lies within the radius of a photon it changes (a shared one its
 //! moving triangles block, or one of the paths it resumed; found from the photons, through a grid
 //! of the visible points). Elsewhere the frame has the same photons within the radius as all the
-//! shared ones, so the common estimate is its own, up to the order of the sum.
+//! shared ones, so the common estimate is its own, up to the order of the sum. Where it differs,
+//! the sum of every shared photon at the visible point is kept from the common estimate, and the
+//! frame gathers only its changed photons there: the shared ones it does not keep, their flux
+//! negated, and those it traced. A pixel gathers all its photons again only where its eye path
+//! was resumed or a changed photon shows a wall that cuts its disc (walls can hide photons).
 
 use std::ops::Range;
 use std::sync::Arc;
@@ -108,6 +112,9 @@ struct EyeRecord {
     common_round: FirstRound,
     /// The open edges' cut of its visible point's disc, where the common photons asked for it.
     edge_cut: Option<Vec3>,
+    /// What every shared photon adds up to at its visible point, where frames share estimates
+    /// and those photons show no wall the point lies behind.
+    beside: Option<PhotonSums>,
 }
 
 /// What [`run_shared_pass`] hands each frame: its pixel estimates and the work it did itself.
@@ -246,7 +253,9 @@ impl GatherSets<'_> {
 
 /// A frame's estimates at the pixels where they differ from the common ones: those whose
 /// watched path its moving triangles change, and those whose visible point its `changed`
-/// photons reach, in pixel order.
+/// photons reach, in pixel order. Where every shared photon's sums at a visible point are
+/// known, the frame's are those changed by its photons there; elsewhere (a changed photon on a
+/// wall, a path resumed) the pixel gathers its own.
 fn differing_estimates(
     frame: &Renderer,
     pass: &PassSamples,
@@ -269,13 +278,44 @@ fn differing_estimates(
         Ok(i) => &changes[i],
         Err(_) => &EyeChange::Same,
     };
+    let changed = PhotonSet::new(changed, pass.radius, &frame.scene.open_edges);
     let estimates = marks
         .marked()
         .into_par_iter()
         .with_min_len(64)
-        .map(|pixel| (pixel, sets.estimate(eyes, pixel as usize, change(pixel))))
+        .map(|pixel| {
+            let (record, change) = (&eyes.records[pixel as usize], change(pixel));
+            let estimate = changed_estimate(&changed, record, change)
+                .unwrap_or_else(|| sets.estimate(eyes, pixel as usize, change));
+            (pixel, estimate)
+        })
         .collect();
     (estimates, stats)
+}
+
+/// A pixel's estimate from what every shared photon adds up to at its visible point changed by
+/// a frame's `changed` photons, as its eye path changed; `None` where that sum is not known,
+/// the eye path was resumed, or a changed photon shows a wall.
+fn changed_estimate(changed: &PhotonSet, record: &EyeRecord, change: &EyeChange) -> Option<PixelEstimate> {
+    let eye = match change {
+        EyeChange::Same => &record.end.result,
+        EyeChange::Direct(eye) => eye,
+        EyeChange::Resumed(_) => return None,
+    };
+    let sums = changed.sums_changed(eye.point.as_ref()?, record.beside?)?;
+    let edge_cut = |vp: &_| record.edge_cut.unwrap_or_else(|| changed.edge_cut(vp));
+    Some(changed.estimate_cut(eye, sums, edge_cut))
+}
+
+/// Where a frame's photons differ from all the shared ones: the shared photons it does not
+/// keep, with their flux negated, then the photons of the paths it traced itself.
+fn changed_photons(shared: &SharedPhotons, frame: &FramePhotons) -> Vec<Photon> {
+    let mut photons = record_photons(shared, |r, record| frame.valid[r]..record.photons.len(), |_| &[]);
+    for photon in &mut photons {
+        photon.flux = -photon.flux;
+    }
+    photons.extend(frame.own.iter().flatten());
+    photons
 }
 
 /// Traces every photon path of `pass` against the static triangles, keeping the segments that
@@ -386,12 +426,6 @@ fn unstable_photons(shared: &SharedPhotons, always_valid: &[usize]) -> Vec<Photo
     record_photons(shared, |r, record| always_valid[r]..record.photons.len(), |_| &[])
 }
 
-/// Where a frame's photons differ from all the shared ones: the shared photons it does not
-/// keep, and the photons of the paths it traced itself.
-fn changed_photons(shared: &SharedPhotons, frame: &FramePhotons) -> Vec<Photon> {
-    record_photons(shared, |r, record| frame.valid[r]..record.photons.len(), |r| &frame.own[r])
-}
-
 /// For each record `r` of a path some frame may change, its shared photons `kept(r)` (counted
 /// along the path), then `traced(r)`.
 fn record_photons<'a>(
@@ -442,7 +476,7 @@ fn trace_shared_eyes(
         });
         let direct_watched = end.direct.map(|t| t.ray.is_some_and(|r| swept.meets(r)));
         let common_round = end.result.point.map_or(FirstRound::default(), |vp| common_set.first_round(&vp));
-        let record = EyeRecord { end, watched, direct_watched, common_round, edge_cut: None };
+        let record = EyeRecord { end, watched, direct_watched, common_round, edge_cut: None, beside: None };
         (record, start_stats + stats)
     });
     let watched = (0..records.len() as u32)
@@ -458,8 +492,11 @@ fn trace_shared_eyes(
             .map(|r| {
                 let eye = &r.end.result;
                 let sums = eye.point.map_or(PhotonSums::default(), |vp| {
-                    let unstable_round = unstable_set.first_round(&vp);
-                    sum_over(&vp, &[(common_set, r.common_round), (unstable_set, unstable_round)])
+                    let rounds =
+                        [(common_set, r.common_round), (unstable_set, unstable_set.first_round(&vp))];
+                    let sums = sum_over(&vp, &rounds);
+                    r.beside = rounds.iter().all(|(_, round)| !round.behind_a_wall()).then_some(sums);
+                    sums
                 });
                 common_set.estimate_cut(eye, sums, |vp| *r.edge_cut.insert(common_set.edge_cut(vp)))
             })
