@@ -13,7 +13,7 @@ denoising and adaptive sampling off, a 1-pixel box filter, no glossy filter, and
 to Caustic's 32 bounces (volume bounces too). Budgets are CPU seconds (threads x rendering wall
 time; both renderers' times exclude loading and BVH building, as Cycles' time limit does). Cycles renders once per
 budget; Caustic renders once for the largest budget with `--log` and `--reference`, whose lines
-(after passes 1, 2, 4, ...) give its error along the way.
+(four to each doubling of the passes) give its error along the way.
 
 The error is the relative MSE of luminance, mean of (Y - Y_ref)^2 / (Y_ref^2 + f^2), f = 1% of
 the reference's mean (`caustic compare`), against tests/bench/<scene>.exr: the mean of two long

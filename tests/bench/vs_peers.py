@@ -17,8 +17,8 @@ no glossy filter, 32 bounces); Mitsuba renders the same scene converted by mitsu
 independent sampler, a 1-pixel box filter.
 
 Budgets are CPU seconds. Each renderer renders once up to the largest budget and its error is
-read along the way: Caustic from its `--log` with `--reference` (threads x wall time after passes
-1, 2, 4, ...), Mitsuba and Cycles as running means of renders of 1, 1, 2, 4, ... samples with
+read along the way: Caustic from its `--log` with `--reference` (threads x wall time, four lines
+to each doubling of the passes), Mitsuba and Cycles as running means of renders of 1, 1, 2, 4, ... samples with
 other seeds (the CPU time of the render calls, measured, without loading and BVH building; Cycles
 keeps its data between calls). Errors at the budgets are interpolated on log-log axes.
 

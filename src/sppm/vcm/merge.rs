@@ -5,6 +5,7 @@
 //! from light vertices on surfaces meeting the camera vertex's, and from the scene's open edges.
 
 use glam::Vec3;
+use rayon::prelude::*;
 use std::f32::consts::FRAC_1_PI;
 use std::sync::Arc;
 
@@ -26,6 +27,21 @@ struct Arrival {
     hero_only: bool,
     partials: LightPartials,
     segments: u32,
+}
+
+impl Arrival {
+    /// What merging reads of light vertex `v`.
+    fn of(v: &LightVertex) -> Self {
+        let ng = v.lobe.frame.ng();
+        Arrival {
+            wi: v.wo,
+            ng: if ng.dot(v.wo) < 0.0 { -ng } else { ng },
+            throughput: v.throughput,
+            hero_only: v.hero_only,
+            partials: v.partials,
+            segments: v.segments,
+        }
+    }
 }
 
 /// The pass's light vertices, sorted by grid bucket, their positions kept apart (most of those in
@@ -66,30 +82,18 @@ pub struct CameraVertex<'a> {
 impl MergeSet {
     /// The light vertices of `vertices` for merging within `radius`: those a segment or more past
     /// their light's first vertex (direct light is not merged), in a scene whose surfaces end at
-    /// `open_edges`.
+    /// `open_edges`. Built in parallel, the vertices kept in their order (the same bits with any
+    /// thread count).
     pub fn new<'a>(
-        vertices: impl Iterator<Item = &'a LightVertex>,
+        vertices: impl ParallelIterator<Item = &'a LightVertex>,
         radius: f32,
         open_edges: &Arc<OpenEdges>,
     ) -> Self {
         let vertices: Vec<&LightVertex> = vertices.filter(|v| v.segments > 1).collect();
-        let positions: Vec<Vec3> = vertices.iter().map(|v| v.p).collect();
+        let positions: Vec<Vec3> = vertices.par_iter().with_min_len(4096).map(|v| v.p).collect();
         let (grid, order) = PhotonGrid::build(&positions, radius);
-        let sorted = order
-            .iter()
-            .map(|&i| {
-                let v = vertices[i as usize];
-                let ng = v.lobe.frame.ng();
-                Arrival {
-                    wi: v.wo,
-                    ng: if ng.dot(v.wo) < 0.0 { -ng } else { ng },
-                    throughput: v.throughput,
-                    hero_only: v.hero_only,
-                    partials: v.partials,
-                    segments: v.segments,
-                }
-            })
-            .collect();
+        let sorted =
+            order.par_iter().with_min_len(4096).map(|&i| Arrival::of(vertices[i as usize])).collect();
         let positions = Positions::new(order.iter().map(|&i| positions[i as usize]));
         MergeSet { sorted, positions, grid, kernel: Kernel::new(radius), open_edges: Arc::clone(open_edges) }
     }

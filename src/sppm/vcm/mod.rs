@@ -130,7 +130,7 @@ impl Renderer<'_> {
         let weights = PassWeights::new(pass.radius, paths);
         let view = View::new(self.scene.camera, self.settings.crop);
         let chunks = self.trace_light_subpaths(pass, &weights, &view);
-        let vertices = chunks.iter().flat_map(|chunk| &chunk.vertices);
+        let vertices = chunks.par_iter().flat_map_iter(|chunk| &chunk.vertices);
         let merge_set = MergeSet::new(vertices, pass.radius, &self.scene.open_edges);
         let lights = Lights { chunks: &chunks, paths, merge_set: &merge_set };
         let pixels = (self.settings.width * self.settings.height) as usize;
