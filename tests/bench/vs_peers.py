@@ -6,7 +6,7 @@ build first):
     cargo build --release
     target/bpy-venv/bin/pip install matplotlib mitsuba     # once; `cargo test` made the venv
     target/bpy-venv/bin/python tests/bench/vs_peers.py [--budgets 10,30,100,300,600] [--threads 2]
-        [--scenes caustic,glossy_interior] [--peers mitsuba,cycles] [-o bench-peers]
+        [--scenes caustic,glossy_interior] [--peers mitsuba,cycles] [--side-by-side] [-o bench-peers]
 
 The scenes are built in Blender (bpy) by tests/bench/blender_scenes.py: the caustic box (the demo)
 and the glossy interior (the diffuse box with rough gold and aluminium blocks: diffuse and glossy
@@ -21,6 +21,9 @@ read along the way: Caustic from its `--log` with `--reference` (threads x wall 
 to each doubling of the passes), Mitsuba and Cycles as running means of renders of 1, 1, 2, 4, ... samples with
 other seeds (the CPU time of the render calls, measured, without loading and BVH building; Cycles
 keeps its data between calls). Errors at the budgets are interpolated on log-log axes.
+`--side-by-side` renders Caustic's two methods at once, each with half the threads, so that a
+machine whose speed drifts between runs (this one's by up to 25%) slows both alike: their ratio
+is then measured at equal CPU time by construction.
 
 The error is the relative MSE of luminance against tests/bench/<scene>.exr (`caustic compare`;
 vs_cycles.py's `--make-reference` makes a reference and records its provenance and its own noise
@@ -39,6 +42,7 @@ import math
 import os
 import pathlib
 import resource
+import subprocess
 import sys
 
 ROOT = pathlib.Path(__file__).resolve().parents[2]
@@ -111,14 +115,39 @@ def cycles_curve(scene, folder, args, reference):
     return progressive(chunk, max(args.budgets), folder, args.binary, reference)
 
 
-def caustic_run(gltf, folder, method, args, reference):
-    """Caustic with `--method method` to the largest budget; gives its curve."""
+def caustic_flags(folder, method, threads, args, reference):
+    """`caustic render`'s flags for `--method method` on `threads` threads to the largest budget,
+    logging to folder/render.log (emptied first)."""
+    folder.mkdir(parents=True, exist_ok=True)
     log = folder / "render.log"
     log.unlink(missing_ok=True)
-    flags = ["--method", method, "--time-budget", str(max(args.budgets) / args.threads), "--threads",
-             str(args.threads), "--seed", str(BENCH_SEED), "--log", str(log), "--reference", str(reference)]
-    render_caustic(args.binary, gltf, folder, flags)
-    return caustic_curve(log, args.threads)
+    return ["--method", method, "--time-budget", str(max(args.budgets) / threads), "--threads", str(threads),
+            "--seed", str(BENCH_SEED), "--log", str(log), "--reference", str(reference)]
+
+
+def caustic_runs(gltf, folder, args, reference):
+    """Caustic with each method in turn, on all the threads; gives their curves."""
+    curves = []
+    for method in METHODS:
+        out = folder / f"caustic_{method}"
+        render_caustic(args.binary, gltf, out, caustic_flags(out, method, args.threads, args, reference))
+        curves.append(caustic_curve(out / "render.log", args.threads))
+    return curves
+
+
+def caustic_runs_side_by_side(gltf, folder, args, reference):
+    """Caustic with both methods at once, each on half the threads; gives their curves."""
+    threads = max(1, args.threads // len(METHODS))
+    outs = [folder / f"caustic_{method}" for method in METHODS]
+    runs = []
+    for method, out in zip(METHODS, outs):
+        flags = caustic_flags(out, method, threads, args, reference)
+        command = [args.binary, "render", str(gltf), "-o", str(out), "--progress", "none", *flags]
+        runs.append(subprocess.Popen(command))
+    for method, run in zip(METHODS, runs):
+        if run.wait() != 0:
+            raise SystemExit(f"caustic --method {method} failed (exit status {run.returncode})")
+    return [caustic_curve(out / "render.log", threads) for out in outs]
 
 
 def slope(curve, low, high, floor=0.0):
@@ -142,10 +171,10 @@ def bench_scene(name, args):
         raise SystemExit(f"no reference {reference}: make one with vs_cycles.py --make-reference PASSES --scenes {name}")
     gltf = export(scene, folder)
     curves, images = {}, {}
-    for method in METHODS:
-        out = folder / f"caustic_{method}"
-        curves[f"caustic_{method}"] = caustic_run(gltf, out, method, args, reference)
-        images[f"caustic_{method}"] = out / "frame_0001.exr"
+    runs = caustic_runs_side_by_side if args.side_by_side else caustic_runs
+    for method, curve in zip(METHODS, runs(gltf, folder, args, reference)):
+        curves[f"caustic_{method}"] = curve
+        images[f"caustic_{method}"] = folder / f"caustic_{method}" / "frame_0001.exr"
     peers = {"mitsuba": mitsuba_curve, "cycles": cycles_curve}
     for peer in args.peers:
         out = folder / peer
@@ -224,6 +253,8 @@ def main():
     parser = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
     add_common_arguments(parser, "10,30,100,300,600", "caustic,glossy_interior", "bench-peers")
     parser.add_argument("--peers", default="mitsuba,cycles", type=lambda s: [p for p in s.split(",") if p])
+    parser.add_argument("--side-by-side", action="store_true",
+                        help="render Caustic's two methods at once, each on half the threads")
     args = parser.parse_args()
     unknown = [s for s in args.scenes if s not in SCENES] + [p for p in args.peers if p not in ("mitsuba", "cycles")]
     if unknown:
