@@ -155,12 +155,8 @@ impl PhotonSet {
     /// Buckets `photons` for gathers of radius `radius` in a scene whose surfaces end at
     /// `open_edges`.
     pub fn new(photons: &[Photon], radius: f32, open_edges: &Arc<OpenEdges>) -> Self {
-        let positions: Vec<Vec3> = photons.par_iter().with_min_len(4096).map(|p| p.p).collect();
-        let (grid, order) = PhotonGrid::build(&positions, radius);
-        let sorted =
-            order.par_iter().with_min_len(4096).map(|&i| Arrival::of(&photons[i as usize])).collect();
-        let reach = reach(positions.iter().copied(), radius);
-        let positions = Positions::new(order.iter().map(|&i| positions[i as usize]));
+        let (grid, sorted, positions) = bucketed(photons, radius, |p| p.p, Arrival::of);
+        let reach = reach(photons.iter().map(|p| p.p), radius);
         PhotonSet {
             sorted,
             positions,
@@ -293,6 +289,20 @@ pub fn sum_over(vp: &VisiblePoint, rounds: &[(&PhotonSet, FirstRound)]) -> Photo
         rounds.iter().map(|(_, first)| first.sums).reduce(|a, b| a + b)
     };
     sums.unwrap_or_default()
+}
+
+/// `items` (at `position`) bucketed for lookups within `radius`, in parallel: the grid, what
+/// `arrival` reads of each item, in bucket order, and their positions in that order, kept apart.
+pub(super) fn bucketed<I: Sync, A: Send>(
+    items: &[I],
+    radius: f32,
+    position: impl Fn(&I) -> Vec3 + Sync,
+    arrival: impl Fn(&I) -> A + Sync,
+) -> (PhotonGrid, Vec<A>, Positions) {
+    let positions: Vec<Vec3> = items.par_iter().with_min_len(4096).map(&position).collect();
+    let (grid, order) = PhotonGrid::build(&positions, radius);
+    let sorted = order.par_iter().with_min_len(4096).map(|&i| arrival(&items[i as usize])).collect();
+    (grid, sorted, Positions::new(order.iter().map(|&i| positions[i as usize])))
 }
 
 /// Photon positions, one array per coordinate, so that four distances are tested at once.

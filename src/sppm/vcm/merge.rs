@@ -14,7 +14,7 @@ use super::mis::{merging, LightPartials, MergeVertex, Partials, PassWeights};
 use crate::materials::{Bsdf, ShadingFrame};
 use crate::scene::OpenEdges;
 use crate::spectrum::SampledSpectrum;
-use crate::sppm::gather::{kernel_mass_within, Kernel, Positions, Wall, EDGE_COSINE};
+use crate::sppm::gather::{bucketed, kernel_mass_within, Kernel, Positions, Wall, EDGE_COSINE};
 use crate::sppm::grid::PhotonGrid;
 use crate::sppm::media::Media;
 
@@ -90,11 +90,7 @@ impl MergeSet {
         open_edges: &Arc<OpenEdges>,
     ) -> Self {
         let vertices: Vec<&LightVertex> = vertices.filter(|v| v.segments > 1).collect();
-        let positions: Vec<Vec3> = vertices.par_iter().with_min_len(4096).map(|v| v.p).collect();
-        let (grid, order) = PhotonGrid::build(&positions, radius);
-        let sorted =
-            order.par_iter().with_min_len(4096).map(|&i| Arrival::of(vertices[i as usize])).collect();
-        let positions = Positions::new(order.iter().map(|&i| positions[i as usize]));
+        let (grid, sorted, positions) = bucketed(&vertices, radius, |v| v.p, |v| Arrival::of(v));
         MergeSet { sorted, positions, grid, kernel: Kernel::new(radius), open_edges: Arc::clone(open_edges) }
     }
 
