@@ -464,6 +464,7 @@ const BENCH_RESOLUTION: [u32; 2] = [640, 360];
 
 /// The program: parse, run, and exit non-zero with one message on failure.
 pub fn main() -> std::process::ExitCode {
+    report_panics_as_errors();
     let cli = Cli::parse();
     match run(cli) {
         Ok(()) => std::process::ExitCode::SUCCESS,
@@ -472,4 +473,30 @@ pub fn main() -> std::process::ExitCode {
             std::process::ExitCode::FAILURE
         }
     }
+}
+
+/// A panic (a bug in Caustic) is reported on one `caustic: error:` line that says where it
+/// happened and what went wrong, so that whoever ran the renderer (the add-on shows the last
+/// error line) sees the cause rather than Rust's note about backtraces. With `RUST_BACKTRACE`
+/// set, Rust's own report follows.
+fn report_panics_as_errors() {
+    let rust_report = std::panic::take_hook();
+    std::panic::set_hook(Box::new(move |info| {
+        let message = info
+            .payload()
+            .downcast_ref::<&str>()
+            .map(|s| s.to_string())
+            .or_else(|| info.payload().downcast_ref::<String>().cloned())
+            .unwrap_or_else(|| "no message".into());
+        let place = info
+            .location()
+            .map_or_else(|| "an unknown place".into(), |l| format!("{}:{}", l.file(), l.line()));
+        eprintln!(
+            "caustic: error: internal error at {place}: {} (a bug in Caustic: please report it with the scene)",
+            message.replace('\n', " ")
+        );
+        if std::env::var_os("RUST_BACKTRACE").is_some() {
+            rust_report(info);
+        }
+    }));
 }

@@ -209,9 +209,16 @@ fn info_lists_the_animated_values() {
 
 /// A sun's caustic under a glass ball, next to a point light whose intensity is animated: photons
 /// choose the animated light by its peak power and the sun by its own, so the sun's caustic (which
-/// only photons carry) is as bright as in the same scene with nothing animated, within 5%.
+/// only photons carry) is as bright as in the same scene with nothing animated, within 5%; with
+/// and without a world (the world is the last light, which an animated light once shifted).
 #[test]
 fn a_sun_keeps_its_photons_beside_an_animated_light() {
+    for world in [false, true] {
+        sun_beside_an_animated_light(world);
+    }
+}
+
+fn sun_beside_an_animated_light(world: bool) {
     let dir = tempfile::tempdir().unwrap();
     let scene = |animated: bool| {
         let mut gltf = GltfBuilder::default();
@@ -232,7 +239,11 @@ fn a_sun_keeps_its_photons_beside_an_animated_light() {
             );
         }
         gltf.camera([0.0, 3.0, 0.01], [0.0, -1.0, -0.0025], 0.5);
-        gltf.scene_extras(json!({"resolution": [64, 64]}));
+        let mut extras = json!({"resolution": [64, 64]});
+        if world {
+            extras["world"] = json!({"color": [0.3, 0.3, 0.3], "strength": 1.0});
+        }
+        gltf.scene_extras(extras);
         gltf.write(dir.path(), if animated { "animated" } else { "still" })
     };
     let caustic = |path: &Path, out: &str| {
@@ -242,6 +253,8 @@ fn a_sun_keeps_its_photons_beside_an_animated_light() {
         render(&s, 2).luminance(28, 36, 28, 36)
     };
     let (animated, still) = (caustic(&scene(true), "a"), caustic(&scene(false), "b"));
-    eprintln!("the sun's caustic: {animated:.3} with an animated light beside it, {still:.3} without");
+    eprintln!(
+        "the sun's caustic (world {world}): {animated:.3} beside an animated light, {still:.3} without"
+    );
     assert!((animated / still - 1.0).abs() < 0.05, "{animated} against {still}");
 }

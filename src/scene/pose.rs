@@ -431,11 +431,12 @@ impl Prepared {
         powers[..fixed].copy_from_slice(&self.fixed_choice_powers);
         let peak = |l: usize| peak_power(&d.lights[l], &d.rig, time, self.sphere);
         let moving_punctual = self.moving_lights.iter().map(|&l| peak(l));
+        // The world, when there is one, is the last light; it keeps its own power.
+        let end = powers.len() - usize::from(d.world.is_some());
         let emitters = match &self.peak_materials {
             Some(peak) => triangle_lights(moving, peak, 0).0.iter().map(Light::power).collect(),
-            None => powers[fixed + self.moving_lights.len()..].to_vec(),
+            None => powers[fixed + self.moving_lights.len()..end].to_vec(),
         };
-        let end = powers.len() - usize::from(d.world.is_some());
         let choice: Vec<f64> = moving_punctual.chain(emitters).collect();
         powers[fixed..end].copy_from_slice(&choice);
         powers
