@@ -136,10 +136,7 @@ def write_environment(image, folder):
     sRGB are decoded. Saved through a Non-Color image: Blender converts a Linear Rec.709 image's
     pixels to display sRGB when it saves them as EXR."""
     import numpy as np
-    where = f"'{image.name}' ({bpy.path.abspath(image.filepath) or 'packed'})"
     width, height = image.size
-    if width == 0 or height == 0 or not image.has_data:
-        raise RuntimeError(f"the world's environment image {where} cannot be read")
     pixels = np.empty(width * height * 4, np.float32)
     image.pixels.foreach_get(pixels)
     pixels = pixels.reshape(-1, 4)
@@ -187,8 +184,34 @@ def world_extras(world, folder):
     if plan.environment is None:
         colour = plan.background.inputs["Color"].default_value
         return {"color": [colour[0], colour[1], colour[2]], "strength": strength}
+    if not readable(plan.environment.image):
+        return {"color": list(MISSING_IMAGE), "strength": strength}
     return {"image": write_environment(plan.environment.image, folder), "strength": strength,
             "rotation_deg": environment_rotation_deg(plan.mapping)}
+
+
+# The colour Cycles shows for an image it cannot read.
+MISSING_IMAGE = (1.0, 0.0, 1.0)
+
+
+def readable(image):
+    """Whether Blender can read `image`'s pixels (loading it if it has not yet)."""
+    width, height = image.size
+    return width > 0 and height > 0 and image.has_data
+
+
+def image_place(image):
+    """An image's name and file, for messages."""
+    return f"'{image.name}' ({bpy.path.abspath(image.filepath, library=image.library) or 'packed'})"
+
+
+def world_image_warnings(world):
+    """A world's environment image that cannot be read: rendered magenta, as Cycles renders it."""
+    plan = world_plan(world) if world is not None and world.node_tree is not None else WorldPlan()
+    if plan.environment is None or readable(plan.environment.image):
+        return []
+    return [f"world '{world.name}': its environment image {image_place(plan.environment.image)} cannot be read; "
+            "the world is rendered magenta, as Cycles renders a missing image"]
 
 
 # The width of a baked world's image (its height is half): 0.35 degrees a pixel.
@@ -426,11 +449,66 @@ def material_extras(material):
     if surface is not None and surface.type == 'HOLDOUT':
         return {"holdout": True}
     extras = {"priority": settings.priority} if settings.priority else {}
+    if not colour_attributes_read(material):
+        extras["vertex_colours"] = False
     if settings.dispersion == 'ABBE':
         extras["abbe"] = settings.abbe
     elif settings.dispersion == 'GLASS':
         extras["glass"] = settings.glass
     return extras or None
+
+
+def colour_space(image):
+    """How Cycles reads `image`'s stored values: "linear" (Non-Color, or a Linear colour space),
+    "srgb", or None for a float image or another colour space (glTF's rule for the slot then)."""
+    settings = image.colorspace_settings
+    if settings.is_data or (not image.is_float and settings.name.startswith("Linear")):
+        return "linear"
+    if not image.is_float and settings.name == "sRGB":
+        return "srgb"
+    return None
+
+
+def image_extras(export_image):
+    """The colour space of an image the exporter writes (from one Blender image, or packed from
+    several of one colour space): glTF reads a base colour as sRGB and data as linear whatever
+    Blender's label, so the label travels (a Non-Color image as base colour stays undecoded, an
+    sRGB roughness is decoded, as in Cycles)."""
+    sources = {fill.image for fill in export_image.fills.values() if getattr(fill, "image", None) is not None}
+    if export_image.original is not None:
+        sources.add(export_image.original)
+    spaces = {colour_space(image) for image in sources}
+    return {"colour_space": spaces.pop()} if len(spaces) == 1 and None not in spaces else None
+
+
+def colour_attributes_read(material, tree=None):
+    """The colour attributes `material`'s nodes read (Color Attribute nodes with an output in use;
+    "" for the active one), in its node groups too."""
+    tree = tree or (material.node_tree if material is not None else None)
+    if tree is None:
+        return set()
+    read = set()
+    for node in tree.nodes:
+        if node.type == 'VERTEX_COLOR' and any(output.is_linked for output in node.outputs):
+            read.add(node.layer_name)
+        elif node.type == 'GROUP' and node.node_tree is not None:
+            read |= colour_attributes_read(material, node.node_tree)
+    return read
+
+
+def colour_attribute_warnings(objects):
+    """Meshes whose materials read different colour attributes: glTF carries one set of vertex
+    colours a mesh, so every material on it shows the one the exporter picks."""
+    warnings = []
+    for obj in objects:
+        if obj.type != 'MESH':
+            continue
+        read = set().union(*(colour_attributes_read(slot.material) for slot in obj.material_slots))
+        if len(read) > 1:
+            names = ", ".join(f"'{name}'" if name else "the active one" for name in sorted(read))
+            warnings.append(f"object '{obj.name}': its materials read different colour attributes ({names}); "
+                            "every one of them is rendered with the same one (glTF carries one a mesh)")
+    return warnings
 
 
 def add_extras(gltf_object, caustic):
@@ -461,6 +539,10 @@ class glTF2ExportUserExtension:
         if _exporting:
             add_extras(gltf_node, node_extras(blender_object))
 
+    def gather_image_hook(self, gltf_image, export_image, blender_shader_sockets, export_settings):
+        if _exporting:
+            add_extras(gltf_image, image_extras(export_image))
+
     def gather_camera_hook(self, gltf_camera, blender_camera, export_settings):
         if _exporting:
             fit_orthographic(gltf_camera, blender_camera, bpy.context.scene)
@@ -470,6 +552,7 @@ class glTF2ExportUserExtension:
             add_extras(gltf_material, material_extras(blender_material))
             complete_layers(gltf_material, blender_material)
             add_volume(gltf_material, blender_material)
+            show_missing_base_colour(gltf_material, blender_material)
 
 
 def volume_node(material):
@@ -576,6 +659,37 @@ def world_fog(world):
         absorption = [max(1.0 - c, 0.0) * density for c in node.inputs["Color"].default_value[:3]]
         medium = {"absorption": absorption} if max(absorption) > 0.0 else None
     return medium
+
+
+def unreadable_images(material):
+    """The Image Texture nodes of `material` in use whose image Blender cannot read (a missing
+    file): Blender's exporter drops their textures, Cycles shows them magenta."""
+    tree = material.node_tree if material is not None else None
+    if tree is None:
+        return []
+    return [node for node in tree.nodes if node.type == 'TEX_IMAGE' and node.image is not None
+            and any(output.is_linked for output in node.outputs) and not readable(node.image)]
+
+
+def show_missing_base_colour(gltf_material, material):
+    """A Base Color read from an image that cannot be read is magenta, as Cycles shows it."""
+    surface = principled_node(material)
+    pbr = gltf_material.pbr_metallic_roughness
+    if surface is None or pbr is None:
+        return
+    if linked_node(surface.inputs["Base Color"]) in unreadable_images(material):
+        pbr.base_color_factor = [*MISSING_IMAGE, 1.0]
+        pbr.base_color_texture = None
+
+
+def missing_image_warnings(material):
+    """What of `material` reads an image that cannot be read."""
+    surface = principled_node(material)
+    base = linked_node(surface.inputs["Base Color"]) if surface is not None else None
+    return [f"material '{material.name}': its image {image_place(node.image)} cannot be read; "
+            + ("its Base Color is rendered magenta, as Cycles renders a missing image" if node == base
+               else "what it feeds is rendered without it (Cycles shows it magenta)")
+            for node in unreadable_images(material)]
 
 
 def complete_layers(gltf_material, material):
@@ -696,7 +810,10 @@ def scene_warnings(depsgraph):
     materials = {slot.material for obj in depsgraph.scene.objects if obj.type == 'MESH'
                  for slot in obj.material_slots if slot.material is not None}
     warnings = [w for m in sorted(materials, key=lambda m: m.name) for w in material_warnings(m)]
+    warnings += [w for m in sorted(materials, key=lambda m: m.name) for w in missing_image_warnings(m)]
     warnings += world_volume_warnings(depsgraph.scene.world)
+    warnings += world_image_warnings(depsgraph.scene.world)
+    warnings += colour_attribute_warnings(depsgraph.scene.objects)
     warnings += camera_warnings(depsgraph.scene)
     warnings += animated.unrendered_warnings(depsgraph.scene)
     for light in {obj.data for obj in depsgraph.scene.objects if obj.type == 'LIGHT'}:
@@ -717,7 +834,11 @@ def export(scene, path):
     options = dict(filepath=str(path), export_format='GLTF_SEPARATE', export_cameras=True, export_lights=True,
                    export_extras=True, export_apply=True, export_yup=True, use_renderable=True,
                    use_active_scene=True, export_animations=True, export_animation_mode='SCENE',
-                   export_force_sampling=True, export_frame_range=True, export_pointer_animation=False)
+                   export_force_sampling=True, export_frame_range=True, export_pointer_animation=False,
+                   # Vertex colours only where a material reads them (by default the exporter
+                   # writes the active colour attribute on every mesh, which glTF multiplies in).
+                   export_vertex_color='MATERIAL', export_all_vertex_colors=False,
+                   export_active_vertex_color_when_no_material=False)
     _exporting = True
     warm = [light for light in bpy.data.lights if getattr(light, "use_temperature", False)]
     _temperatures.update({light.name: light.temperature for light in warm})

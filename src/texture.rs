@@ -108,7 +108,18 @@ fn clamp_to_i64(x: f32) -> i64 {
     }
 }
 
-/// An image decoded to RGBA in [0, 1], as stored (sRGB-encoded where it holds colour).
+/// How an image's texels encode their values.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Encoding {
+    /// As glTF says for the slot that reads it: sRGB for colour, linear for data.
+    AsGltfSays,
+    /// sRGB wherever it is read (Blender's sRGB colour space; Cycles decodes it even as data).
+    Srgb,
+    /// Linear wherever it is read (Blender's Non-Color and Linear colour spaces).
+    Linear,
+}
+
+/// An image decoded to RGBA, as stored (sRGB-encoded where `encoding` says so).
 #[derive(Clone, Debug)]
 pub struct Rgba {
     /// Width in texels.
@@ -119,6 +130,8 @@ pub struct Rgba {
     pub texels: Vec<Vec4>,
     /// Bits per channel (8 or 16).
     pub bits: u32,
+    /// How the texels' colour channels encode their values (alpha is always linear).
+    pub encoding: Encoding,
 }
 
 /// The sRGB transfer function, decoded to linear.
@@ -156,6 +169,7 @@ impl Texture {
     /// Spectra `fit` gives for the texels' linear colours, fitted once per colour at the
     /// image's bit depth (at most 10 bits a channel).
     fn fitted(image: &Rgba, map: TextureMap, fit: impl Fn(Vec3) -> RgbSpectrum) -> Self {
+        let decode = if image.encoding == Encoding::Linear { |c: f32| c } else { srgb_to_linear };
         let levels = ((1u32 << image.bits.min(10)) - 1) as f32;
         let mut cache: HashMap<[u16; 3], RgbSpectrum> = HashMap::new();
         let texels = image
@@ -165,7 +179,7 @@ impl Texture {
                 let key = [p.x, p.y, p.z].map(|c| (c.clamp(0.0, 1.0) * levels).round() as u16);
                 *cache
                     .entry(key)
-                    .or_insert_with(|| fit(Vec3::from(key.map(|c| srgb_to_linear(f32::from(c) / levels)))))
+                    .or_insert_with(|| fit(Vec3::from(key.map(|c| decode(f32::from(c) / levels)))))
             })
             .collect();
         Texture { map, width: image.width, height: image.height, texels }
@@ -197,9 +211,18 @@ pub struct DataTexture {
 }
 
 impl DataTexture {
-    /// The image's texels as they are stored.
+    /// The image's texels as they are stored (their colour channels decoded where the image is
+    /// labelled sRGB, as Cycles reads it).
     pub fn new(image: &Rgba, map: TextureMap) -> Self {
-        DataTexture { map, width: image.width, height: image.height, texels: image.texels.clone() }
+        let texels = match image.encoding {
+            Encoding::Srgb => image
+                .texels
+                .iter()
+                .map(|t| Vec4::new(srgb_to_linear(t.x), srgb_to_linear(t.y), srgb_to_linear(t.z), t.w))
+                .collect(),
+            _ => image.texels.clone(),
+        };
+        DataTexture { map, width: image.width, height: image.height, texels }
     }
 
     /// The texture coordinate set it reads.
@@ -219,7 +242,7 @@ mod tests {
 
     fn image(width: usize, height: usize, f: impl Fn(usize, usize) -> f32) -> Rgba {
         let texels = (0..width * height).map(|i| Vec4::splat(f(i % width, i / width))).collect();
-        Rgba { width, height, texels, bits: 8 }
+        Rgba { width, height, texels, bits: 8, encoding: Encoding::AsGltfSays }
     }
 
     fn at(texture: &DataTexture, u: f32, v: f32) -> f32 {

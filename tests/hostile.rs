@@ -23,6 +23,19 @@ fn run_within_a_minute(mut command: Command) -> Output {
     })
 }
 
+/// The render of `scene` succeeds, with no panic, and its warnings name every part of `expected`:
+/// an image that cannot be read renders magenta, as Cycles renders it, and is named.
+fn assert_rendered_magenta(scene: &Path, expected: &[&str]) {
+    let out = tempfile::tempdir().unwrap();
+    let output = run_within_a_minute(render_command(scene, out.path()));
+    let text = String::from_utf8_lossy(&output.stderr);
+    assert!(output.status.success(), "{} failed: {text}", scene.display());
+    assert!(!text.contains("panicked") && text.contains("magenta"), "{}: {text}", scene.display());
+    for part in expected {
+        assert!(text.contains(part), "{}: '{text}' does not mention '{part}'", scene.display());
+    }
+}
+
 fn render_command(scene: &Path, out: &Path) -> Command {
     let mut command = Command::new(env!("CARGO_BIN_EXE_caustic"));
     command.args(["render", scene.to_str().unwrap(), "-o", out.to_str().unwrap()]);
@@ -150,13 +163,13 @@ fn data_that_runs_past_its_buffer_is_refused() {
         parts.extend_from_slice(expected);
         assert_refused(&path, &parts);
     }
-    // A texture that is not an image: the scene's own .bin named as a texture.
+    // A texture that is not an image (the scene's own .bin named as a texture) renders magenta.
     let texture = furnace_edited(d, "texture.gltf", |doc| {
         doc["images"] = json!([{"uri": "furnace.bin"}]);
         doc["textures"] = json!([{"source": 0}]);
         doc["materials"][0]["pbrMetallicRoughness"]["baseColorTexture"] = json!({"index": 0});
     });
-    assert_refused(&texture, &["texture.gltf", "neither PNG nor JPEG"]);
+    assert_rendered_magenta(&texture, &["texture.gltf", "furnace.bin", "cannot be decoded"]);
 }
 
 /// A disk that fills up while a frame is written: the render fails with the reason, the frame
@@ -289,10 +302,11 @@ fn huge_png() -> Vec<u8> {
     huge
 }
 
-/// Hostile textures are refused with a message naming the image, never a panic or an
-/// out-of-memory: a truncated PNG, and a PNG that claims 100,000 x 100,000 texels.
+/// Hostile textures render magenta (as Cycles renders an image it cannot read) with a warning
+/// naming the image, never a panic or an out-of-memory: a truncated PNG, and a PNG that claims
+/// 100,000 x 100,000 texels.
 #[test]
-fn hostile_textures_are_refused() {
+fn hostile_textures_render_magenta() {
     let dir = tempfile::tempdir().unwrap();
     let d = dir.path();
     let png = small_png();
@@ -304,14 +318,15 @@ fn hostile_textures_are_refused() {
             doc["textures"] = json!([{"source": 0}]);
             doc["materials"][0]["normalTexture"] = json!({"index": 0});
         });
-        assert_refused(&path, &[image, "image"]);
+        assert_rendered_magenta(&path, &[image, "cannot be decoded"]);
     }
 }
 
-/// World images that cannot light a scene are refused naming the file: one that is not an image,
-/// one whose header claims 100,000 x 100,000 pixels, and one with a pixel that is not a number.
+/// World images that cannot light a scene make a magenta world (as in Cycles) with a warning
+/// naming the file: one that is not an image, one whose header claims 100,000 x 100,000 pixels,
+/// and one with a pixel that is not a number.
 #[test]
-fn hostile_world_images_are_refused() {
+fn hostile_world_images_render_magenta() {
     let dir = tempfile::tempdir().unwrap();
     let d = dir.path();
     std::fs::write(d.join("text.hdr"), "#?RADIANCE\nnot a sky\n").unwrap();
@@ -329,7 +344,7 @@ fn hostile_world_images_are_refused() {
         let path = furnace_edited(d, &format!("{image}.gltf"), |doc| {
             doc["scenes"][0]["extras"] = json!({"caustic": {"world": {"image": image, "strength": 1.0}}});
         });
-        assert_refused(&path, &[image, why]);
+        assert_rendered_magenta(&path, &[image, why]);
     }
 }
 

@@ -107,9 +107,23 @@ fn ground_uvs() -> Vec<[f32; 2]> {
 /// The ground of `material` seen from straight above (image x along world +x, 32 x 32 pixels
 /// over x in [-1.02, 1.02]), lit as `light` says: a uniform white world, or a sun.
 fn ground(dir: &Path, material: Value, images: &[&str], light: Light, passes: u64) -> Image {
+    let images = images.iter().map(|uri| json!({"uri": uri})).collect();
+    ground_of_images(dir, material, images, light, passes, |_| {})
+}
+
+/// `ground`, with each image's glTF object given, and `edit` applied to the file before it is
+/// written.
+fn ground_of_images(
+    dir: &Path,
+    material: Value,
+    images: Vec<Value>,
+    light: Light,
+    passes: u64,
+    edit: impl FnOnce(&mut Value),
+) -> Image {
     let mut gltf = GltfBuilder::default();
     for image in images {
-        gltf.texture(image);
+        gltf.image(image);
     }
     let material = gltf.material(material);
     gltf.mesh_with_uvs("Ground", &GROUND, &ground_uvs(), material);
@@ -128,7 +142,10 @@ fn ground(dir: &Path, material: Value, images: &[&str], light: Light, passes: u6
             gltf.scene_extras(json!({"resolution": [32, 32]}));
         }
     }
-    let path = gltf.write(dir, "ground");
+    let mut doc = gltf.to_json();
+    edit(&mut doc);
+    let path = dir.join("ground.gltf");
+    std::fs::write(&path, doc.to_string()).unwrap();
     render(&settings(&path, dir, passes), 2)
 }
 
@@ -230,6 +247,72 @@ fn a_16_bit_base_colour_texture_is_read() {
     let c = f64::from(value) / 65535.0;
     let expected = ((c + 0.055) / 1.055).powf(2.4);
     for (ch, mean) in image.mean(8, 24, 8, 24).iter().enumerate() {
+        assert!((mean / expected - 1.0).abs() < 0.02, "channel {ch}: {mean} vs {expected}");
+    }
+}
+
+/// An image Blender reads as Non-Color (the add-on labels it `colour_space: linear`) is a base
+/// colour of its stored values, undecoded, as Cycles reads it: under a white world the ground's
+/// radiance is the texel's value (2%); labelled sRGB, or unlabelled, it is decoded.
+#[test]
+fn a_non_color_base_colour_texture_is_read_linear() {
+    let dir = tempfile::tempdir().unwrap();
+    let value = 100u8;
+    image::RgbImage::from_pixel(4, 4, image::Rgb([value; 3])).save(dir.path().join("grey.png")).unwrap();
+    let material =
+        lambert(json!({"pbrMetallicRoughness": {"baseColorTexture": {"index": 0}, "metallicFactor": 0.0}}));
+    let stored = f64::from(value) / 255.0;
+    let decoded = ((stored + 0.055) / 1.055).powf(2.4);
+    for (space, expected) in [(Some("linear"), stored), (Some("srgb"), decoded), (None, decoded)] {
+        let mut image = json!({"uri": "grey.png"});
+        if let Some(space) = space {
+            image["extras"] = json!({"caustic": {"colour_space": space}});
+        }
+        let render =
+            ground_of_images(dir.path(), material.clone(), vec![image], Light::WhiteWorld, 16, |_| {});
+        for (ch, mean) in render.mean(8, 24, 8, 24).iter().enumerate() {
+            assert!((mean / expected - 1.0).abs() < 0.02, "{space:?}, channel {ch}: {mean} vs {expected}");
+        }
+    }
+}
+
+/// A texture whose image file is missing renders magenta (reflectance 1, 0, 1), as Cycles shows a
+/// missing image, and the warning names the file; the render does not fail.
+#[test]
+fn a_missing_texture_is_magenta_and_named() {
+    let dir = tempfile::tempdir().unwrap();
+    let material =
+        lambert(json!({"pbrMetallicRoughness": {"baseColorTexture": {"index": 0}, "metallicFactor": 0.0}}));
+    let images = vec![json!({"uri": "textures/wood%20planks.png", "name": "Wood"})];
+    let render = ground_of_images(dir.path(), material, images, Light::WhiteWorld, 16, |_| {});
+    let [r, g, b] = render.mean(8, 24, 8, 24);
+    assert!((r - 1.0).abs() < 0.03 && (b - 1.0).abs() < 0.03 && g < 0.03, "not magenta: {r} {g} {b}");
+    let output = run_caustic(&["info", dir.path().join("ground.gltf").to_str().unwrap()]);
+    let stderr = String::from_utf8_lossy(&output.stderr);
+    assert!(output.status.success(), "{stderr}");
+    let named =
+        stderr.contains("image 'Wood'") && stderr.contains("wood planks.png") && stderr.contains("magenta");
+    assert!(named, "the warning does not name the missing file:\n{stderr}");
+}
+
+/// A WebP texture (`EXT_texture_webp`, required, with no PNG fallback) is read: under a white world
+/// the ground shows the texel's decoded sRGB value (2%).
+#[test]
+fn a_webp_texture_is_read() {
+    let dir = tempfile::tempdir().unwrap();
+    let value = 180u8;
+    let texels = image::RgbaImage::from_pixel(4, 4, image::Rgba([value, value, value, 255]));
+    texels.save_with_format(dir.path().join("grey.webp"), image::ImageFormat::WebP).unwrap();
+    let material =
+        lambert(json!({"pbrMetallicRoughness": {"baseColorTexture": {"index": 0}, "metallicFactor": 0.0}}));
+    let images = vec![json!({"uri": "grey.webp"})];
+    let render = ground_of_images(dir.path(), material, images, Light::WhiteWorld, 16, |doc| {
+        doc["textures"][0] = json!({"extensions": {"EXT_texture_webp": {"source": 0}}});
+        doc["extensionsUsed"] = json!(["EXT_texture_webp"]);
+        doc["extensionsRequired"] = json!(["EXT_texture_webp"]);
+    });
+    let expected = ((f64::from(value) / 255.0 + 0.055) / 1.055).powf(2.4);
+    for (ch, mean) in render.mean(8, 24, 8, 24).iter().enumerate() {
         assert!((mean / expected - 1.0).abs() < 0.02, "channel {ch}: {mean} vs {expected}");
     }
 }

@@ -92,6 +92,10 @@ pub struct Material {
     /// An area light's surface: every ray passes through it unchanged, as through a surface
     /// alpha cuts away, and it casts no shadow (Blender's lights hide nothing behind them).
     pub light_surface: bool,
+    /// Whether a mesh's vertex colours (`COLOR_0`) multiply its base colour and alpha: glTF's rule,
+    /// unless the file says the material does not read them (Blender's exporter writes the
+    /// colours of one material on every primitive of the mesh).
+    pub reads_vertex_colours: bool,
 }
 
 /// What a path meets at a surface point: a BSDF in its frame, and the factor on the path's
@@ -252,6 +256,7 @@ impl Material {
             holdout: false,
             seen_by_camera: true,
             light_surface: false,
+            reads_vertex_colours: true,
         }
     }
 

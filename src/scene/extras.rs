@@ -181,6 +181,9 @@ pub struct MaterialExtras {
     pub holdout: bool,
     /// The medium that fills it (in place of `KHR_materials_volume`'s absorption).
     pub medium: Option<MediumExtras>,
+    /// Whether it reads the mesh's vertex colours (`COLOR_0`): false where Blender's material has
+    /// no Color Attribute node (glTF's rule, true, when not given).
+    pub vertex_colours: Option<bool>,
 }
 
 /// A homogeneous medium: coefficients per world unit, as linear Rec.709 colours.

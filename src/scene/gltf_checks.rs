@@ -15,10 +15,6 @@ pub fn describe_import_error(error: gltf::Error) -> String {
             )
         }
         gltf::Error::Base64(e) => format!("a buffer's data URI is not valid base64 ({e})"),
-        gltf::Error::Image(e) => format!("an image cannot be decoded ({e}): textures must be PNG or JPEG"),
-        gltf::Error::UnsupportedImageEncoding => {
-            "an image is neither PNG nor JPEG (the only texture formats glTF allows)".into()
-        }
         other => format!("cannot load glTF: {other}"),
     }
 }

@@ -32,6 +32,7 @@ use super::description::{
 };
 use super::extras::{self, NodeExtras, SceneExtras, ShutterExtras, ShutterPosition};
 use super::gltf_materials::material;
+use super::gltf_textures::Images;
 use super::{shapes, tangents, SceneError, TriangleRef, VertexExtras};
 use crate::camera::Projection;
 use crate::geometry::Cone;
@@ -86,9 +87,10 @@ pub fn load(path: &Path) -> Result<Description, SceneError> {
         gltf::Gltf::from_slice(&bytes).map_err(|e| fail(gltf_checks::describe_import_error(e)))?;
     gltf_checks::check_references(&document).map_err(fail)?;
     let base = path.parent().unwrap_or(Path::new("."));
-    let imported = gltf::import_buffers(&document, Some(base), blob)
-        .and_then(|buffers| Ok((gltf::import_images(&document, Some(base), &buffers)?, buffers)));
-    let (images, buffers) = imported.map_err(|e| fail(gltf_checks::describe_import_error(e)))?;
+    let buffers = gltf::import_buffers(&document, Some(base), blob)
+        .map_err(|e| fail(gltf_checks::describe_import_error(e)))?;
+    let mut image_warnings = Vec::new();
+    let images = Images::load(&document, base, &buffers, &mut image_warnings).map_err(fail)?;
     gltf_checks::check_accessors(&document, &buffers).map_err(fail)?;
     let gltf_scene = document
         .default_scene()
@@ -112,6 +114,7 @@ pub fn load(path: &Path) -> Result<Description, SceneError> {
         .flat_map(|(m, loaded)| gltf_unrendered::material_warnings(&m, loaded))
         .collect();
     unrendered.extend(animations.warnings.iter().cloned());
+    unrendered.extend(image_warnings);
     let mut builder = Builder {
         document: &document,
         buffers: &buffers,
@@ -132,7 +135,12 @@ pub fn load(path: &Path) -> Result<Description, SceneError> {
     for node in gltf_scene.nodes() {
         builder.visit(&node, &rig).map_err(fail)?;
     }
-    let world = scene_extras.world.as_ref().map(|w| world(w, path)).transpose().map_err(fail)?;
+    let world = scene_extras
+        .world
+        .as_ref()
+        .map(|w| world(w, path, &mut builder.warnings))
+        .transpose()
+        .map_err(fail)?;
     let fog = scene_extras
         .fog
         .as_ref()
@@ -372,15 +380,22 @@ fn shutter(extras: Option<&ShutterExtras>) -> Result<Shutter, String> {
     Ok(Shutter { open, length: s.length_frames })
 }
 
-/// The world from the scene extras; an image path is relative to the glTF file's folder.
-fn world(w: &extras::WorldExtras, gltf_path: &Path) -> Result<World, String> {
+/// The world from the scene extras; an image path is relative to the glTF file's folder. An image
+/// that cannot be read is a magenta world, as Cycles shows a missing environment image, and a
+/// warning says why.
+fn world(w: &extras::WorldExtras, gltf_path: &Path, warnings: &mut Vec<String>) -> Result<World, String> {
     match &w.image {
         Some(image) => {
             gltf_checks::check_relative(image)
                 .map_err(|why| format!("scene extras `caustic.world.image` '{image}': {why}"))?;
             let path = gltf_path.parent().unwrap_or(Path::new(".")).join(image);
-            World::from_image(&path, w.strength, w.rotation_deg)
-                .map_err(|e| format!("scene extras `caustic.world.image`: {e}"))
+            Ok(World::from_image(&path, w.strength, w.rotation_deg).unwrap_or_else(|e| {
+                warnings.push(format!(
+                    "the world's image (scene extras `caustic.world.image`): {e}; the world is rendered \
+                     magenta, as Cycles renders a missing image"
+                ));
+                World::uniform(Vec3::new(1.0, 0.0, 1.0) * w.strength)
+            }))
         }
         None => Ok(World::uniform(Vec3::from(w.color) * w.strength)),
     }
@@ -887,13 +902,16 @@ impl Builder<'_> {
                 .unwrap_or_else(|| vec![Vec2::ZERO; count]);
             // Attributes must have one entry per position; a mismatched one is dropped, not read past.
             let material = primitive.material().index().map_or(self.material_offset, |i| i as u32);
-            let cuts = self.materials[material as usize].alpha.cuts();
+            let (cuts, reads_colours) = {
+                let m = &self.materials[material as usize];
+                (m.alpha.cuts(), m.reads_vertex_colours)
+            };
             let warnings = &mut self.warnings;
             let (normals, uvs) = (
                 matching_attribute(normals, count, "NORMAL", name, warnings),
                 matching_attribute(uvs, count, "TEXCOORD_0", name, warnings),
             );
-            let extras = vertex_extras(&reader, count, name, cuts, warnings);
+            let extras = vertex_extras(&reader, count, name, cuts, reads_colours, warnings);
             let indices: Vec<u32> = match reader.read_indices() {
                 Some(indices) => indices.into_u32().collect(),
                 None => (0..count as u32).collect(),
@@ -1071,14 +1089,16 @@ where
     Ok(targets)
 }
 
-/// `TEXCOORD_1`, `COLOR_0` (fitted to reflectance spectra) and `TANGENT` of a primitive of
-/// `count` vertices; each empty where the primitive has none or a mismatched one (warned). The
-/// colours' alpha is kept where it is below 1 somewhere on a material whose alpha `cuts`.
+/// `TEXCOORD_1`, `COLOR_0` (fitted to reflectance spectra; only where the material `reads_colours`)
+/// and `TANGENT` of a primitive of `count` vertices; each empty where the primitive has none or a
+/// mismatched one (warned). The colours' alpha is kept where it is below 1 somewhere on a
+/// material whose alpha `cuts`.
 fn vertex_extras<'a, 's, F>(
     reader: &gltf::mesh::Reader<'a, 's, F>,
     count: usize,
     name: &str,
     cuts: bool,
+    reads_colours: bool,
     warnings: &mut Vec<String>,
 ) -> VertexExtras
 where
@@ -1086,8 +1106,10 @@ where
 {
     let uvs1: Vec<Vec2> =
         reader.read_tex_coords(1).map(|t| t.into_f32().map(Vec2::from).collect()).unwrap_or_default();
-    let colours: Vec<Vec4> =
-        reader.read_colors(0).map(|c| c.into_rgba_f32().map(Vec4::from).collect()).unwrap_or_default();
+    let colours: Vec<Vec4> = match reader.read_colors(0) {
+        Some(colours) if reads_colours => colours.into_rgba_f32().map(Vec4::from).collect(),
+        _ => Vec::new(),
+    };
     let tangents: Vec<Vec4> = reader.read_tangents().map(|t| t.map(Vec4::from).collect()).unwrap_or_default();
     let tangents = optional_attribute(tangents, count, "TANGENT", name, warnings);
     let finite = tangents.iter().all(|t| t.is_finite());

@@ -7,7 +7,7 @@ use std::sync::Arc;
 use glam::Vec3;
 
 use super::extras::{self, MaterialExtras, MediumExtras};
-use super::gltf_textures::{decode, info_map, normal_map, raw_info};
+use super::gltf_textures::{info_map, normal_map, raw_info, Images};
 use gltf::material::AlphaMode;
 
 use crate::materials::{
@@ -17,29 +17,25 @@ use crate::spectrum::{Dispersion, Illuminant, RgbSpectrum};
 use crate::texture::{DataTexture, Rgba, Texture, TextureMap};
 
 /// A glTF material as a Caustic material.
-pub fn material(
-    m: &gltf::Material,
-    document: &gltf::Document,
-    images: &[gltf::image::Data],
-) -> Result<Material, String> {
+pub fn material(m: &gltf::Material, document: &gltf::Document, images: &Images) -> Result<Material, String> {
     let name = m.name().unwrap_or("unnamed").to_string();
     let pbr = m.pbr_metallic_roughness();
     let factor = Vec3::from_slice(&pbr.base_color_factor()[..3]);
     let in_material = |e: String| format!("material '{name}': {e}");
-    let image = |texture: gltf::Texture| decode(&images[texture.source().index()]).map_err(in_material);
+    let image = |texture: gltf::Texture| images.of(&texture);
     let base_colour = match pbr.base_color_texture().and_then(|i| Some((info_map(&i)?, i))) {
         Some((map, info)) => {
-            BaseColour::Texture(Arc::new(Texture::reflectance(&image(info.texture())?, map, factor)))
+            BaseColour::Texture(Arc::new(Texture::reflectance(image(info.texture()), map, factor)))
         }
         None => BaseColour::Constant(RgbSpectrum::reflectance(factor)),
     };
     let metallic_roughness = match pbr.metallic_roughness_texture().and_then(|i| Some((info_map(&i)?, i))) {
-        Some((map, info)) => Some(Arc::new(DataTexture::new(&image(info.texture())?, map))),
+        Some((map, info)) => Some(Arc::new(DataTexture::new(image(info.texture()), map))),
         None => None,
     };
     let coverage = || -> Result<Coverage, String> {
         let texture = match pbr.base_color_texture().and_then(|i| Some((info_map(&i)?, i))) {
-            Some((map, info)) => Some(Arc::new(DataTexture::new(&image(info.texture())?, map))),
+            Some((map, info)) => Some(Arc::new(DataTexture::new(image(info.texture()), map))),
             None => None,
         };
         Ok(Coverage { factor: pbr.base_color_factor()[3].clamp(0.0, 1.0), texture })
@@ -51,7 +47,7 @@ pub fn material(
     };
     let normal_map = match m.normal_texture().and_then(|n| Some((normal_map(&n)?, n))) {
         Some((map, normal)) => Some(NormalMap {
-            texture: Arc::new(DataTexture::new(&image(normal.texture())?, map)),
+            texture: Arc::new(DataTexture::new(image(normal.texture()), map)),
             scale: if normal.scale().is_finite() { normal.scale() } else { 1.0 },
         }),
         None => None,
@@ -59,11 +55,11 @@ pub fn material(
     let emission = Vec3::from(m.emissive_factor()) * m.emissive_strength().unwrap_or(1.0);
     let emission_texture = match m.emissive_texture().and_then(|i| Some((info_map(&i)?, i))) {
         Some((map, info)) if emission.max_element() > 0.0 => {
-            Some(Arc::new(Texture::emission(&image(info.texture())?, map, emission)))
+            Some(Arc::new(Texture::emission(image(info.texture()), map, emission)))
         }
         _ => None,
     };
-    let specular = specular(m, &image)?;
+    let specular = specular(m, &image);
     let clearcoat = clearcoat(m, document, images).map_err(in_material)?;
     let sheen = sheen(m, document, images).map_err(in_material)?;
     let extras: MaterialExtras =
@@ -101,31 +97,27 @@ pub fn material(
         holdout: false,
         seen_by_camera: true,
         light_surface: false,
+        reads_vertex_colours: extras.vertex_colours.unwrap_or(true),
     })
 }
 
 /// The specular layer: the index with `KHR_materials_specular`'s factor and colour and their
 /// textures (`image` decodes a texture's image), or `None` for a factor of 0.
-fn specular(
-    m: &gltf::Material,
-    image: &dyn Fn(gltf::Texture) -> Result<Rgba, String>,
-) -> Result<Option<Specular>, String> {
+fn specular<'a>(m: &gltf::Material<'a>, image: &dyn Fn(gltf::Texture<'a>) -> &'a Rgba) -> Option<Specular> {
     let ext = m.specular();
     let factor = ext.as_ref().map_or(1.0, |s| s.specular_factor()).clamp(0.0, 1.0);
     let colour = ext.as_ref().map_or(Vec3::ONE, |s| Vec3::from(s.specular_color_factor())).max(Vec3::ZERO);
-    let Some(mut layer) = Specular::new(m.ior().unwrap_or(1.5), factor, colour) else {
-        return Ok(None);
-    };
+    let mut layer = Specular::new(m.ior().unwrap_or(1.5), factor, colour)?;
     let Some(ext) = ext else {
-        return Ok(Some(layer));
+        return Some(layer);
     };
     if let Some((map, info)) = ext.specular_texture().and_then(|i| Some((info_map(&i)?, i))) {
-        layer.factor_texture = Some(Arc::new(DataTexture::new(&image(info.texture())?, map)));
+        layer.factor_texture = Some(Arc::new(DataTexture::new(image(info.texture()), map)));
     }
     if let Some((map, info)) = ext.specular_color_texture().and_then(|i| Some((info_map(&i)?, i))) {
-        layer.colour_texture = Some(Arc::new(Texture::reflectance(&image(info.texture())?, map, Vec3::ONE)));
+        layer.colour_texture = Some(Arc::new(Texture::reflectance(image(info.texture()), map, Vec3::ONE)));
     }
-    Ok(Some(layer))
+    Some(layer)
 }
 
 /// `KHR_materials_clearcoat` (read raw: the gltf crate does not type it), or `None` without a
@@ -133,7 +125,7 @@ fn specular(
 fn clearcoat(
     m: &gltf::Material,
     document: &gltf::Document,
-    images: &[gltf::image::Data],
+    images: &Images,
 ) -> Result<Option<Clearcoat>, String> {
     const EXTENSION: &str = "KHR_materials_clearcoat";
     let Some(value) = m.extension_value(EXTENSION) else {
@@ -145,7 +137,7 @@ fn clearcoat(
     }
     let texture = |key: &str| {
         let texture = raw_texture(EXTENSION, value, key, document, images)?;
-        Ok::<_, String>(texture.map(|(image, map, scale)| (Arc::new(DataTexture::new(&image, map)), scale)))
+        Ok::<_, String>(texture.map(|(image, map, scale)| (Arc::new(DataTexture::new(image, map)), scale)))
     };
     let texture_only = |key: &str| texture(key).map(|t| t.map(|(texture, _)| texture));
     Ok(Some(Clearcoat {
@@ -159,18 +151,17 @@ fn clearcoat(
 
 /// An extension's texture reference `key` in `value`: its decoded image and where it reads, or
 /// `None` when absent or on a texture coordinate set Caustic does not carry (warned).
-fn raw_texture(
+fn raw_texture<'a>(
     extension: &str,
     value: &serde_json::Value,
     key: &str,
     document: &gltf::Document,
-    images: &[gltf::image::Data],
-) -> Result<Option<(Rgba, TextureMap, f32)>, String> {
+    images: &'a Images,
+) -> Result<Option<(&'a Rgba, TextureMap, f32)>, String> {
     let in_key = |e: String| format!("{extension}.{key}: {e}");
     let Some(info) = raw_info(document, &value[key]).map_err(in_key)? else { return Ok(None) };
     let Some(map) = info.map else { return Ok(None) };
-    let image = decode(&images[info.texture.source().index()]).map_err(in_key)?;
-    Ok(Some((image, map, info.scale)))
+    Ok(Some((images.of(&info.texture), map, info.scale)))
 }
 
 /// A factor in [0, 1] at `key` in `value`, `default` when absent or not a finite number.
@@ -182,11 +173,7 @@ fn unit_factor(value: &serde_json::Value, key: &str, default: f32) -> f32 {
 }
 
 /// `KHR_materials_sheen` (read raw), or `None` without a sheen or with a black one.
-fn sheen(
-    m: &gltf::Material,
-    document: &gltf::Document,
-    images: &[gltf::image::Data],
-) -> Result<Option<Sheen>, String> {
+fn sheen(m: &gltf::Material, document: &gltf::Document, images: &Images) -> Result<Option<Sheen>, String> {
     const EXTENSION: &str = "KHR_materials_sheen";
     let Some(value) = m.extension_value(EXTENSION) else {
         return Ok(None);
@@ -206,10 +193,10 @@ fn sheen(
     Ok(Some(Sheen {
         colour: RgbSpectrum::reflectance(factor),
         colour_texture: texture("sheenColorTexture")?
-            .map(|(image, map, _)| Arc::new(Texture::reflectance(&image, map, factor))),
+            .map(|(image, map, _)| Arc::new(Texture::reflectance(image, map, factor))),
         roughness: unit_factor(value, "sheenRoughnessFactor", 0.0),
         roughness_texture: texture("sheenRoughnessTexture")?
-            .map(|(image, map, _)| Arc::new(DataTexture::new(&image, map))),
+            .map(|(image, map, _)| Arc::new(DataTexture::new(image, map))),
     }))
 }
 

@@ -1,53 +1,137 @@
-//! glTF textures into Caustic textures: decoded images (8- and 16-bit, float), the texture
+//! glTF textures into Caustic textures: decoded images (8- and 16-bit, float; PNG, JPEG and
+//! WebP, a missing one magenta as in Cycles) with their colour spaces, the texture
 //! coordinate set, `KHR_texture_transform` and the sampler's wrap modes and filter (NEAREST or
 //! linear; minification filters are not needed: a pass's pixel samples average the footprint).
 
+use std::path::Path;
+
 use glam::{Vec2, Vec4};
-use gltf::image::Format;
 use gltf::texture::WrappingMode;
 
-use crate::texture::{Rgba, TextureMap, Wrap, UV_SETS};
+use crate::texture::{Encoding, Rgba, TextureMap, Wrap, UV_SETS};
 
-/// A decoded image as RGBA in [0, 1] (grey images' value in R, G and B; alpha 1 where absent).
-pub fn decode(image: &gltf::image::Data) -> Result<Rgba, String> {
-    let (channels, bits) = match image.format {
-        Format::R8 => (1, 8),
-        Format::R8G8 => (2, 8),
-        Format::R8G8B8 => (3, 8),
-        Format::R8G8B8A8 => (4, 8),
-        Format::R16 => (1, 16),
-        Format::R16G16 => (2, 16),
-        Format::R16G16B16 => (3, 16),
-        Format::R16G16B16A16 => (4, 16),
-        Format::R32G32B32FLOAT => (3, 32),
-        Format::R32G32B32A32FLOAT => (4, 32),
-    };
-    let values: Vec<f32> = match bits {
-        8 => image.pixels.iter().map(|&v| f32::from(v) / 255.0).collect(),
-        16 => image
-            .pixels
-            .chunks_exact(2)
-            .map(|b| f32::from(u16::from_ne_bytes([b[0], b[1]])) / 65535.0)
-            .collect(),
-        _ => image.pixels.chunks_exact(4).map(|b| f32::from_ne_bytes([b[0], b[1], b[2], b[3]])).collect(),
-    };
-    let (width, height) = (image.width as usize, image.height as usize);
-    if width == 0 || height == 0 || values.len() != width * height * channels {
-        return Err(format!("an image of {width} x {height} texels holds {} values", values.len()));
-    }
-    let texels = values
-        .chunks_exact(channels)
-        .map(|c| {
-            let at = |i: usize| if c[i].is_finite() { c[i] } else { 0.0 };
-            match channels {
-                1 => Vec4::new(at(0), at(0), at(0), 1.0),
-                2 => Vec4::new(at(0), at(0), at(0), at(1)),
-                3 => Vec4::new(at(0), at(1), at(2), 1.0),
-                _ => Vec4::new(at(0), at(1), at(2), at(3)),
+/// The file's images, decoded, with the colour space each is labelled with. An image that cannot
+/// be read or decoded is shown as Cycles shows a missing image: magenta, with a warning that names
+/// it.
+pub struct Images {
+    decoded: Vec<Option<Rgba>>,
+    missing: Rgba,
+}
+
+/// Cycles' colour for a missing image.
+const MISSING: Vec4 = Vec4::new(1.0, 0.0, 1.0, 1.0);
+
+/// `EXT_texture_webp`: a texture's WebP image, in place of (or beside) its `source`.
+pub const WEBP: &str = "EXT_texture_webp";
+
+/// The `caustic` entry of an image's extras: the colour space Blender reads it in.
+#[derive(Debug, Default, serde::Deserialize)]
+#[serde(deny_unknown_fields)]
+struct ImageExtras {
+    /// "srgb" or "linear"; without it, glTF's rule for the slot (colour sRGB, data linear).
+    colour_space: Option<String>,
+}
+
+impl Images {
+    /// Decodes `document`'s images (files relative to `base`, data URIs, buffer views), and says
+    /// in `warnings` which cannot be read.
+    pub fn load(
+        document: &gltf::Document,
+        base: &Path,
+        buffers: &[gltf::buffer::Data],
+        warnings: &mut Vec<String>,
+    ) -> Result<Self, String> {
+        let mut decoded = Vec::new();
+        for image in document.images() {
+            let name = image.name().map_or(format!("image {}", image.index()), |n| format!("image '{n}'"));
+            let extras: ImageExtras =
+                super::extras::parse(image.extras()).map_err(|e| format!("{name}: extras `caustic`: {e}"))?;
+            let encoding = match extras.colour_space.as_deref() {
+                None => Encoding::AsGltfSays,
+                Some("srgb") => Encoding::Srgb,
+                Some("linear") => Encoding::Linear,
+                Some(other) => {
+                    return Err(format!(
+                        "{name}: extras `caustic.colour_space` is '{other}' (srgb or linear)"
+                    ))
+                }
+            };
+            let read = encoded(&image, base, buffers).and_then(|(bytes, source)| {
+                decode(&bytes).map_err(|e| format!("{source} cannot be decoded ({e})"))
+            });
+            match read {
+                Ok(rgba) => decoded.push(Some(Rgba { encoding, ..rgba })),
+                Err(why) => {
+                    warnings.push(format!(
+                        "{name}: {why}; it is rendered magenta, as Cycles renders a missing image"
+                    ));
+                    decoded.push(None);
+                }
             }
-        })
-        .collect();
-    Ok(Rgba { width, height, texels, bits: bits.min(16) })
+        }
+        let missing =
+            Rgba { width: 1, height: 1, texels: vec![MISSING], bits: 8, encoding: Encoding::Linear };
+        Ok(Images { decoded, missing })
+    }
+
+    /// The image `texture` shows: its WebP image where it has one (`EXT_texture_webp`), else its
+    /// source; magenta where that image could not be read or there is none.
+    pub fn of(&self, texture: &gltf::Texture) -> &Rgba {
+        let webp = texture.extension_value(WEBP).and_then(|w| w["source"].as_u64()).map(|i| i as usize);
+        let index = webp.or_else(|| texture.source().map(|s| s.index()));
+        index.and_then(|i| self.decoded.get(i)?.as_ref()).unwrap_or(&self.missing)
+    }
+}
+
+/// An image's encoded bytes and where they came from (for messages).
+fn encoded(
+    image: &gltf::Image,
+    base: &Path,
+    buffers: &[gltf::buffer::Data],
+) -> Result<(Vec<u8>, String), String> {
+    match image.source() {
+        gltf::image::Source::View { view, .. } => {
+            let buffer = &buffers[view.buffer().index()].0;
+            let bytes = buffer.get(view.offset()..view.offset() + view.length());
+            let bytes =
+                bytes.ok_or_else(|| format!("buffer view {} lies outside its buffer", view.index()))?;
+            Ok((bytes.to_vec(), format!("buffer view {}", view.index())))
+        }
+        gltf::image::Source::Uri { uri, .. } => match uri.strip_prefix("data:") {
+            Some(data) => {
+                use base64::Engine;
+                let payload =
+                    data.split_once(";base64,").map(|(_, b)| b).ok_or("a data URI that is not base64")?;
+                let bytes = base64::engine::general_purpose::STANDARD
+                    .decode(payload)
+                    .map_err(|e| format!("a data URI that is not valid base64 ({e})"))?;
+                Ok((bytes, "a data URI".into()))
+            }
+            None => {
+                let file = urlencoding::decode(uri).map_or_else(|_| uri.to_string(), |f| f.into_owned());
+                let path = base.join(&file);
+                let bytes =
+                    std::fs::read(&path).map_err(|e| format!("'{}' cannot be read ({e})", path.display()))?;
+                Ok((bytes, format!("'{}'", path.display())))
+            }
+        },
+    }
+}
+
+/// Encoded image bytes (PNG, JPEG, WebP; OpenEXR and Radiance HDR) as RGBA: grey images' value in
+/// R, G and B, alpha 1 where absent, non-finite values as 0; 8-bit images in [0, 1] as 8-bit,
+/// deeper ones as 16-bit.
+pub fn decode(bytes: &[u8]) -> Result<Rgba, String> {
+    let image = image::load_from_memory(bytes).map_err(|e| e.to_string())?;
+    let (width, height) = (image.width() as usize, image.height() as usize);
+    if width == 0 || height == 0 {
+        return Err("the image has no texels".into());
+    }
+    let bits =
+        if image.color().bytes_per_pixel() / image.color().channel_count().max(1) == 1 { 8 } else { 16 };
+    let finite = |c: f32| if c.is_finite() { c } else { 0.0 };
+    let texels = image.into_rgba32f().pixels().map(|p| Vec4::from(p.0.map(finite))).collect();
+    Ok(Rgba { width, height, texels, bits, encoding: Encoding::AsGltfSays })
 }
 
 fn wrap(mode: WrappingMode) -> Wrap {

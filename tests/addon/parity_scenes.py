@@ -10,6 +10,7 @@ a penumbra) with a function that gives their pixels from the object-index image 
 reference image.
 """
 import math
+import pathlib
 import tempfile
 
 import bpy
@@ -186,6 +187,93 @@ def vertex_coloured(obj):
     node.layer_name = "Col"
     m.node_tree.links.new(node.outputs["Color"], m.node_tree.nodes["Principled BSDF"].inputs["Base Color"])
     obj.data.materials.append(m)
+
+
+def colour_attribute(obj, name, colour):
+    """A colour attribute `name` of one `colour` (RGBA) on `obj`'s corners."""
+    attribute = obj.data.color_attributes.new(name, 'FLOAT_COLOR', 'CORNER')
+    for corner in attribute.data:
+        corner.color = colour
+    return attribute
+
+
+def reads_colour_attribute(material, name, alpha=False):
+    """Links a Color Attribute node reading `name` into the material's Base Color (and Alpha)."""
+    nodes, links = material.node_tree.nodes, material.node_tree.links
+    node = nodes.new("ShaderNodeVertexColor")
+    node.layer_name = name
+    links.new(node.outputs["Color"], nodes["Principled BSDF"].inputs["Base Color"])
+    if alpha:
+        links.new(node.outputs["Alpha"], nodes["Principled BSDF"].inputs["Alpha"])
+    return material
+
+
+def textured_by(name, img):
+    """A material whose Base Color is `img` through an Image Texture node."""
+    m = principled(name, Roughness=0.7)
+    node = texture_node(m, img)
+    m.node_tree.links.new(node.outputs["Color"], m.node_tree.nodes["Principled BSDF"].inputs["Base Color"])
+    return m
+
+
+def webp_image(name, grey):
+    """An image of one grey (stored value) saved as a WebP file and loaded from it, as a user's
+    .webp texture is."""
+    img = image(name + "-source", 4, 4, lambda x, y: (grey, grey, grey, 1.0))
+    path = pathlib.Path(tempfile.gettempdir()) / f"caustic-parity-{name}.webp"
+    img.filepath_raw, img.file_format = str(path), 'WEBP'
+    img.save()
+    return bpy.data.images.load(str(path))
+
+
+def seen_through(obj, half):
+    """The pixels within `half` pixels of where the camera sees `obj`'s centre (an object that
+    alpha makes see-through has no pixels of its own in Cycles' object-index pass)."""
+    scene = bpy.context.scene
+    bpy.context.view_layer.update()
+    x, y, _ = world_to_camera_view(scene, scene.camera, obj.matrix_world.translation)
+    row, column = int((1 - y) * SIZE), int(x * SIZE)
+
+    def mask(index, reference):
+        block = np.zeros(index.shape, bool)
+        block[row - half:row + half + 1, column - half:column + half + 1] = True
+        return block
+    return mask
+
+
+def attributes_and_images():
+    """What real files combine and glTF carries differently: a cube whose active colour attribute
+    (red) its material never reads ('Unused'), one whose material reads a named attribute that is
+    not the active one ('Painted'), one whose attribute's alpha (0.4) feeds Alpha ('Faded'); a
+    Non-Color image as a base colour (read undecoded), an image whose file is missing (magenta),
+    and a WebP image."""
+    clear()
+    studio(principled("Floor", Base_Color=(0.5, 0.5, 0.5, 1.0)))
+    row = []
+    unused = add(bpy.ops.mesh.primitive_cube_add, principled("Blue", Base_Color=(0.2, 0.4, 0.8, 1.0)), index=2,
+                 size=0.9)
+    colour_attribute(unused, "Red", (0.9, 0.05, 0.05, 1.0))
+    row.append(unused)
+    painted = add(bpy.ops.mesh.primitive_cube_add, reads_colour_attribute(principled("Paint"), "Paint"), index=3,
+                  size=0.9)
+    colour_attribute(painted, "Paint", (0.9, 0.6, 0.1, 1.0))
+    painted.data.color_attributes.active_color = colour_attribute(painted, "Other", (0.1, 0.1, 0.9, 1.0))
+    row.append(painted)
+    faded = add(bpy.ops.mesh.primitive_cube_add, reads_colour_attribute(principled("Faded"), "Veil", alpha=True),
+                index=4, size=0.9)
+    colour_attribute(faded, "Veil", (0.1, 0.8, 0.2, 0.4))
+    row.append(faded)
+    data = image("noncolour", 4, 4, lambda x, y: (0.3, 0.3, 0.3, 1.0), colorspace='Non-Color')
+    row.append(add(bpy.ops.mesh.primitive_cube_add, textured_by("Non-Color", data), index=5, size=0.9))
+    lost = bpy.data.images.new("lost", 4, 4)
+    lost.source, lost.filepath = 'FILE', str(pathlib.Path(tempfile.gettempdir()) / "no-such-folder" / "lost.png")
+    row.append(add(bpy.ops.mesh.primitive_cube_add, textured_by("Missing", lost), index=6, size=0.9))
+    row.append(add(bpy.ops.mesh.primitive_cube_add, textured_by("WebP", webp_image("webp", 0.6)), index=7, size=0.9))
+    for i, obj in enumerate(row):
+        obj.location = (-1.5 + 1.5 * (i % 3), 1.0 - 1.6 * (i // 3), 0.45)
+    camera((0.0, -7.0, 4.0), (0.0, 0.2, 0.3))
+    return {"Floor": 1, "Unused": 2, "Painted": 3, "Faded": seen_through(faded, 3), "Non-Color": 5, "Missing": 6,
+            "WebP": 7}
 
 
 def textured():
@@ -761,11 +849,19 @@ PHOTONS = {"sky": 65536}
 PEAKS = {"hdri": {"Sky": 2.0}}
 
 # Regions whose colour (each channel's share of their sum) is compared, with its tolerance.
-COLOURS = {"glass": {"Tinted light": 0.03}, "warm_light": {"Floor": 0.03, "Grey": 0.03}}
+COLOURS = {"glass": {"Tinted light": 0.03}, "warm_light": {"Floor": 0.03, "Grey": 0.03},
+           "attributes_and_images": {"Unused": 0.03, "Painted": 0.03}}
+
+# Objects of a saturated colour whose channels under 3% of their brightest (the green of magenta:
+# only the specular layer's) are compared within 5% of the brightest channel, not of their own
+# value: a spectral renderer's specular reflection of an out-of-gamut colour differs there by a
+# few thousandths.
+DIM_CHANNELS = {"attributes_and_images": {"Missing"}}
 
 SCENES = {"glass": glass, "principled_spheres": principled_spheres, "textured": textured, "normal_mapped": normal_mapped,
           "coated": coated, "sheen": sheen, "leaf": leaf, "warm_light": warm_light, "soft_light": soft_light,
           "hdri": hdri, "ortho_camera": ortho_camera, "shifted_camera": shifted_camera,
           "panorama_camera": panorama_camera, "film_and_holdouts": film_and_holdouts,
           "spot_light": spot_light, "soft_spot": soft_spot, "sky": sky, "lights_seen": lights_seen,
-          "spread_light": spread_light, "soft_falloff": soft_falloff, "rigged": rigged, "animated": animated}
+          "spread_light": spread_light, "soft_falloff": soft_falloff, "rigged": rigged, "animated": animated,
+          "attributes_and_images": attributes_and_images}

@@ -569,15 +569,23 @@ class World(unittest.TestCase):
         world = json.loads(path.read_text())["scenes"][0]["extras"]["caustic"]["world"]
         self.assertAlmostEqual(world["rotation_deg"], -30.0, places=4)
 
-    def test_an_environment_image_that_cannot_be_read_fails_the_render_naming_it(self):
-        glass_sphere_scene()
+    def test_an_environment_image_that_cannot_be_read_is_magenta_and_named(self):
+        """As Cycles renders it: the world is magenta (the floor lit by it has no green), the render
+        goes on, and the warning names the image and its file."""
+        scene = glass_sphere_scene()
         img = bpy.data.images.new("lost-sky", 4, 2, float_buffer=True)
         img.filepath = str(OUT / "no-such-folder" / "sky.hdr")
         img.source = 'FILE'
         environment_world(img)
-        with self.assertRaisesRegex(RuntimeError, r"environment image 'lost-sky' \(.*no-such-folder/sky.hdr\) "
-                                                  "cannot be read"):
-            bpy.ops.render.render()
+        warnings = sys.modules["caustic.export"].scene_warnings(bpy.context.evaluated_depsgraph_get())
+        self.assertTrue(any("'lost-sky'" in w and "no-such-folder/sky.hdr" in w and "magenta" in w
+                            for w in warnings), warnings)
+        for light in [obj for obj in scene.objects if obj.type == 'LIGHT']:
+            light.hide_render = True
+        pixels = render_still("lost-sky")
+        r, g, b = pixels.reshape(-1, 3).mean(axis=0)
+        self.assertGreater(min(r, b), 0.1)
+        self.assertLess(g, 0.01 * min(r, b))
 
     def test_a_world_read_no_other_way_is_baked_by_blender(self):
         """A Mix Shader of a red and a blue Background (a quarter blue) is baked by Cycles into an

@@ -320,7 +320,13 @@ impl GltfBuilder {
 
     /// Adds an image file (relative `uri`) as a texture and returns the texture's index.
     pub fn texture(&mut self, uri: &str) -> usize {
-        self.images.push(json!({"uri": uri}));
+        self.image(json!({"uri": uri}))
+    }
+
+    /// Adds an image (its glTF object: `uri`, `name`, `extras`) as a texture and returns the
+    /// texture's index.
+    pub fn image(&mut self, image: Value) -> usize {
+        self.images.push(image);
         self.images.len() - 1
     }
 
