@@ -106,6 +106,26 @@ fn morph_targets_move_vertices_by_their_animated_weights() {
     assert_moves_alike(dir.path(), &morphed, &rigid(dir.path(), 1.0), 13);
 }
 
+/// A morph target written as Blender's exporter can write it (sparse offsets without a
+/// `bufferView`, normal offsets without either: zeros) shapes the mesh as the same offsets written
+/// plainly do.
+#[test]
+fn sparse_accessors_and_accessors_without_a_buffer_view_are_read() {
+    let dir = tempfile::tempdir().unwrap();
+    let sparse = scene(dir.path(), "sparse", |gltf, material| {
+        gltf.mesh("Square", &SQUARE, material);
+        gltf.sparse_morph_target(&[1.0, 0.0, 0.0].repeat(6));
+        gltf.set_node_weights(gltf.last_node(), &[0.5]);
+    });
+    let offset = scene(dir.path(), "offset", |gltf, material| {
+        gltf.mesh("Square", &SQUARE, material);
+        gltf.set_node_translation(gltf.last_node(), [0.5, 0.0, 0.0]);
+    });
+    let (a, b) = (frame(&sparse, &dir.path().join("a"), 1), frame(&offset, &dir.path().join("b"), 1));
+    assert!((centroid_x(&a) - centroid_x(&b)).abs() < 0.1, "{} vs {}", centroid_x(&a), centroid_x(&b));
+    assert!(a.rmse(&b) < 1e-3 * b.mean_all()[0].max(1e-3), "the shapes differ: RMSE {}", a.rmse(&b));
+}
+
 /// Without animation the node's default `weights` shape the mesh (a still offset of 0.5), and
 /// `caustic info` names the deforming meshes and what deforms them.
 #[test]

@@ -120,11 +120,19 @@ fn references_outside_the_scene_folder_are_refused() {
 fn data_that_runs_past_its_buffer_is_refused() {
     let dir = tempfile::tempdir().unwrap();
     let d = dir.path();
-    let cases: [(&str, fn(&mut Value), &[&str]); 6] = [
+    let cases: [(&str, fn(&mut Value), &[&str]); 7] = [
         (
             "count.gltf",
             |doc| doc["accessors"][0]["count"] = json!(1_000_000_000_000u64),
             &["accessor 0 (1000000000000 elements", "runs past buffer view 0"],
+        ),
+        (
+            "zeros.gltf",
+            |doc| {
+                doc["accessors"][0].as_object_mut().unwrap().remove("bufferView");
+                doc["accessors"][0]["count"] = json!(1_000_000_000_000u64);
+            },
+            &["accessor 0 has no data and claims 1000000000000 elements"],
         ),
         (
             "offset.gltf",

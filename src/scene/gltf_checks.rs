@@ -193,6 +193,34 @@ pub fn check_relative(reference: &str) -> Result<(), String> {
 
 /// Refuses accessors and buffer views that reach past the data they read (a count of 1e12, a
 /// bad offset), before any of it is read.
+/// Refuses a sparse accessor whose indices or values run past their buffer views, or that
+/// replaces no element or more elements than the accessor has.
+fn check_sparse(accessor: &gltf::Accessor, sparse: &gltf::accessor::sparse::Sparse) -> Result<(), String> {
+    let (i, count) = (accessor.index(), sparse.count());
+    if count == 0 || count > accessor.count() {
+        return Err(format!(
+            "accessor {i}: a sparse part of {count} elements in an accessor of {}",
+            accessor.count()
+        ));
+    }
+    let (indices, values) = (sparse.indices(), sparse.values());
+    let parts = [
+        ("indices", indices.view(), indices.offset(), indices.index_type().size()),
+        ("values", values.view(), values.offset(), accessor.size()),
+    ];
+    for (what, view, offset, size) in parts {
+        let end = count.checked_mul(size).and_then(|n| n.checked_add(offset));
+        if end.is_none_or(|end| end > view.length()) {
+            return Err(format!(
+                "accessor {i}: its sparse {what} ({count} of {size} bytes from byte {offset}) run past buffer view {} ({} bytes)",
+                view.index(),
+                view.length()
+            ));
+        }
+    }
+    Ok(())
+}
+
 pub fn check_accessors(document: &gltf::Document, buffers: &[gltf::buffer::Data]) -> Result<(), String> {
     for view in document.views() {
         let available = buffers.get(view.buffer().index()).map_or(0, |b| b.len());
@@ -211,6 +239,9 @@ pub fn check_accessors(document: &gltf::Document, buffers: &[gltf::buffer::Data]
         if count == 0 {
             // glTF requires at least one element (and the gltf crate's reader underflows on none).
             return Err(format!("accessor {} has no elements (count 0)", accessor.index()));
+        }
+        if let Some(sparse) = accessor.sparse() {
+            check_sparse(&accessor, &sparse)?;
         }
         let Some(view) = accessor.view() else { continue };
         let element = accessor.size();

@@ -78,8 +78,9 @@ pub fn load(path: &Path) -> Result<Description, SceneError> {
     // The references are checked before anything they name is read, and the mesh accessor
     // indices before the gltf crate validates the file (its validation indexes them unchecked).
     let bytes = std::fs::read(path).map_err(|e| fail(format!("cannot read the file: {e}")))?;
-    // The pointer channels go before the gltf crate reads the file (it cannot parse them).
-    let (bytes, pointer_channels) = pointers::strip(&bytes).map_err(fail)?;
+    // The pointer channels go before the gltf crate reads the file (it cannot parse them), and
+    // accessors without data get zeros (it refuses them).
+    let (bytes, pointer_channels) = pointers::prepare(&bytes).map_err(fail)?;
     let unchecked = gltf::Gltf::from_slice_without_validation(&bytes)
         .map_err(|e| fail(gltf_checks::describe_import_error(e)))?;
     gltf_checks::check_indices(unchecked.document.as_json()).map_err(fail)?;

@@ -80,16 +80,23 @@ pub struct Keys {
 /// The extensions Caustic reads from the raw JSON, which the gltf crate would refuse as required.
 const READ_RAW: [&str; 2] = [EXTENSION, super::instancing::EXTENSION];
 
-/// The file's bytes without pointer channels (so that the gltf crate reads it) and with the
-/// extensions Caustic reads raw out of `extensionsRequired`, and the pointer channels; the bytes
-/// are borrowed unchanged where neither extension is named.
-pub fn strip(bytes: &[u8]) -> Result<(Cow<'_, [u8]>, Vec<PointerChannel>), String> {
+/// The file's bytes as the gltf crate reads them, and the pointer channels: without pointer
+/// channels, with the extensions Caustic reads raw out of `extensionsRequired`, and with a view of
+/// zeros for every accessor that has neither a `bufferView` nor `sparse` (glTF reads it as zeros;
+/// Blender's exporter writes one for a shape key's normals; the gltf crate refuses it). The bytes
+/// are borrowed unchanged where there is nothing to change.
+pub fn prepare(bytes: &[u8]) -> Result<(Cow<'_, [u8]>, Vec<PointerChannel>), String> {
     let names = |name: &str| bytes.windows(name.len()).any(|w| w == name.as_bytes());
-    if !READ_RAW.iter().any(|name| names(name)) {
+    let is_glb = bytes.starts_with(b"glTF");
+    // A GLB that cannot be read is left to the gltf crate, which says why.
+    let glb = if is_glb { gltf::Glb::from_slice(bytes).ok() } else { None };
+    let json = glb.as_ref().map_or(bytes, |glb| &glb.json);
+    if !READ_RAW.iter().any(|name| names(name)) && !has_accessors_without_data(json) {
         return Ok((Cow::Borrowed(bytes), Vec::new()));
     }
-    if bytes.starts_with(b"glTF") {
-        let glb = gltf::Glb::from_slice(bytes).map_err(|e| format!("not a valid GLB file: {e}"))?;
+    if is_glb {
+        let glb = glb.map_or_else(|| gltf::Glb::from_slice(bytes), Ok);
+        let glb = glb.map_err(|e| format!("not a valid GLB file: {e}"))?;
         let (json, channels) = strip_json(&glb.json)?;
         let out = gltf::Glb { json: Cow::Owned(json), ..glb };
         let bytes = out.to_vec().map_err(|e| format!("cannot rewrite the GLB container: {e}"))?;
@@ -99,7 +106,7 @@ pub fn strip(bytes: &[u8]) -> Result<(Cow<'_, [u8]>, Vec<PointerChannel>), Strin
     Ok((Cow::Owned(json), channels))
 }
 
-/// `json` without pointer channels and without the extension in its lists, and the channels.
+/// `json` as [`prepare`] leaves it, and the pointer channels.
 fn strip_json(json: &[u8]) -> Result<(Vec<u8>, Vec<PointerChannel>), String> {
     let mut root: Value =
         serde_json::from_slice(json).map_err(|e| format!("not a valid glTF file (malformed JSON): {e}"))?;
@@ -132,8 +139,79 @@ fn strip_json(json: &[u8]) -> Result<(Vec<u8>, Vec<PointerChannel>), String> {
     if let Some(names) = root.get_mut("extensionsRequired").and_then(Value::as_array_mut) {
         names.retain(|n| !READ_RAW.iter().any(|raw| n.as_str() == Some(raw)));
     }
+    give_zeros_to_accessors_without_data(&mut root)?;
     let bytes = serde_json::to_vec(&root).map_err(|e| format!("cannot rewrite the JSON: {e}"))?;
     Ok((bytes, found))
+}
+
+/// Whether some accessor of the glTF JSON `json` has neither a `bufferView` nor `sparse` (false
+/// where the JSON cannot be read: the gltf crate says why).
+fn has_accessors_without_data(json: &[u8]) -> bool {
+    #[derive(serde::Deserialize)]
+    struct Root {
+        #[serde(default)]
+        accessors: Vec<Accessor>,
+    }
+    #[derive(serde::Deserialize)]
+    struct Accessor {
+        #[serde(rename = "bufferView")]
+        view: Option<serde::de::IgnoredAny>,
+        sparse: Option<serde::de::IgnoredAny>,
+    }
+    let root = serde_json::from_slice::<Root>(json);
+    root.is_ok_and(|root| root.accessors.iter().any(|a| a.view.is_none() && a.sparse.is_none()))
+}
+
+/// The most bytes of zeros given to accessors without data (64 MiB): more is a hostile count.
+const MOST_ZEROS: u64 = 1 << 26;
+
+/// Gives every accessor without a `bufferView` or `sparse` a view of one new buffer of zeros (a
+/// data URI), as long as the longest of them.
+fn give_zeros_to_accessors_without_data(root: &mut Value) -> Result<(), String> {
+    let Some(accessors) = root.get("accessors").and_then(Value::as_array) else { return Ok(()) };
+    let mut lengths = Vec::new();
+    for (i, accessor) in accessors.iter().enumerate() {
+        if accessor.get("bufferView").is_some() || accessor.get("sparse").is_some() {
+            continue;
+        }
+        let count = accessor["count"].as_u64().unwrap_or(0);
+        let components: u64 = match accessor["type"].as_str() {
+            Some("VEC2") => 2,
+            Some("VEC3") => 3,
+            Some("VEC4" | "MAT2") => 4,
+            Some("MAT3") => 9,
+            Some("MAT4") => 16,
+            _ => 1,
+        };
+        // Four bytes a component covers every component type and its column padding.
+        let length = count.saturating_mul(components * 4);
+        if length > MOST_ZEROS {
+            return Err(format!(
+                "accessor {i} has no data and claims {count} elements (glTF reads them as zeros)"
+            ));
+        }
+        lengths.push((i, length.max(4)));
+    }
+    let Some(longest) = lengths.iter().map(|&(_, length)| length).max() else { return Ok(()) };
+    use base64::Engine;
+    let zeros = base64::engine::general_purpose::STANDARD.encode(vec![0u8; longest as usize]);
+    let buffers = root["buffers"].as_array().map_or(0, Vec::len);
+    let uri = format!("data:application/octet-stream;base64,{zeros}");
+    push(root, "buffers", serde_json::json!({"byteLength": longest, "uri": uri}));
+    for (i, length) in lengths {
+        let view = root["bufferViews"].as_array().map_or(0, Vec::len);
+        push(root, "bufferViews", serde_json::json!({"buffer": buffers, "byteLength": length}));
+        root["accessors"][i]["bufferView"] = view.into();
+    }
+    Ok(())
+}
+
+/// Appends `value` to the array at `key` in `root`, made where there is none.
+fn push(root: &mut Value, key: &str, value: Value) {
+    match root.get_mut(key).and_then(Value::as_array_mut) {
+        Some(array) => array.push(value),
+        None => root[key] = Value::Array(vec![value]),
+    }
 }
 
 /// Reads `channels`' keys from `document` and `tracks` (the scene's `caustic.tracks`) into

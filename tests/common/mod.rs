@@ -212,6 +212,32 @@ impl GltfBuilder {
         }
     }
 
+    /// Adds a morph target to the last mesh as Blender's exporter can write one: its POSITION
+    /// offsets a sparse accessor without a `bufferView` (every vertex listed among the sparse
+    /// values), its NORMAL offsets an accessor with neither (zeros, as glTF reads it).
+    pub fn sparse_morph_target(&mut self, offsets: &[f32]) {
+        let values = self.add_accessor(offsets, 3, "VEC3");
+        let values_view = self.accessors[values]["bufferView"].clone();
+        let count = offsets.len() / 3;
+        let offset = self.buffer.len();
+        self.buffer.extend((0..count).map(|i| i as u8));
+        self.buffer.resize(self.buffer.len().div_ceil(4) * 4, 0);
+        self.buffer_views.push(json!({"buffer": 0, "byteOffset": offset, "byteLength": count}));
+        let indices_view = self.buffer_views.len() - 1;
+        let accessor = &mut self.accessors[values];
+        accessor.as_object_mut().unwrap().remove("bufferView");
+        accessor["sparse"] = json!({"count": count, "indices": {"bufferView": indices_view, "componentType": 5121},
+            "values": {"bufferView": values_view}});
+        self.accessors.push(json!({"componentType": 5126, "count": count, "type": "VEC3"}));
+        let normals = self.accessors.len() - 1;
+        let target = json!({"POSITION": values, "NORMAL": normals});
+        let primitive = &mut self.meshes.last_mut().unwrap()["primitives"][0];
+        match primitive["targets"].as_array_mut() {
+            Some(targets) => targets.push(target),
+            None => primitive["targets"] = json!([target]),
+        }
+    }
+
     /// Animates the morph target weights of `node` with keys at `times` and `weights` (every
     /// target's weight at each key, key after key), interpolated linearly.
     pub fn animate_weights(&mut self, node: usize, times: &[f32], weights: &[f32]) {
