@@ -46,14 +46,22 @@ def floats(value):
         return [float(value)]
 
 
-def light_samplers(index, node_index, light):
-    """(pointer, reader) pairs for light data `light`, glTF light `index` on node `node_index`."""
+def power(obj):
+    """The power Cycles gives light object `obj`: its Power, times its area where Normalize is off."""
+    light = obj.data
+    normalized = getattr(light, "normalize", True)
+    return light.energy if normalized else light.energy * light.area(matrix_world=obj.matrix_world)
+
+
+def light_samplers(index, node_index, obj):
+    """(pointer, reader) pairs for light object `obj`, glTF light `index` on node `node_index`."""
+    light = obj.data
     if light.type == 'AREA':
         extras = f"/nodes/{node_index}/extras/caustic/area_light"
-        return [(f"{extras}/power", lambda: light.energy), (f"{extras}/color", lambda: light.color)]
+        return [(f"{extras}/power", lambda: power(obj)), (f"{extras}/color", lambda: light.color)]
     base = f"/extensions/KHR_lights_punctual/lights/{index}"
     per_watt = LUMENS_PER_WATT if light.type == 'SUN' else LUMENS_PER_WATT / (4 * math.pi)
-    samplers = [(f"{base}/intensity", lambda: light.energy * per_watt), (f"{base}/color", lambda: light.color)]
+    samplers = [(f"{base}/intensity", lambda: power(obj) * per_watt), (f"{base}/color", lambda: light.color)]
     if light.type == 'SPOT':
         samplers.append((f"{base}/spot/outerConeAngle", lambda: light.spot_size / 2))
     return samplers
@@ -95,7 +103,7 @@ def samplers(scene, gltf):
         if obj.type == 'LIGHT' and is_animated(obj.data):
             light = node.get("extensions", {}).get("KHR_lights_punctual", {}).get("light")
             if light is not None or obj.data.type == 'AREA':
-                found += light_samplers(light, node_index, obj.data)
+                found += light_samplers(light, node_index, obj)
         if obj.type == 'CAMERA' and obj == scene.camera and is_animated(obj.data) and "camera" in node:
             found += camera_samplers(node["camera"], obj.data, gltf["cameras"][node["camera"]])
     materials = {m.get("name"): i for i, m in enumerate(gltf.get("materials", []))}

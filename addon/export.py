@@ -16,6 +16,7 @@ temperature have it switched off while the exporter runs (it raises on them) and
 import json
 import math
 import os
+import re
 import pathlib
 import tempfile
 import time
@@ -814,6 +815,8 @@ def scene_warnings(depsgraph):
     warnings += world_volume_warnings(depsgraph.scene.world)
     warnings += world_image_warnings(depsgraph.scene.world)
     warnings += colour_attribute_warnings(depsgraph.scene.objects)
+    warnings += [f"node group '{group.name}' has no Group Output: its outputs give their default values (Blender's "
+                 "glTF exporter raises on it; Caustic adds one while it exports)" for group in groups_without_output()]
     warnings += camera_warnings(depsgraph.scene)
     warnings += animated.unrendered_warnings(depsgraph.scene)
     for light in {obj.data for obj in depsgraph.scene.objects if obj.type == 'LIGHT'}:
@@ -840,22 +843,73 @@ def export(scene, path):
                    export_vertex_color='MATERIAL', export_all_vertex_colors=False,
                    export_active_vertex_color_when_no_material=False)
     _exporting = True
-    warm = [light for light in bpy.data.lights if getattr(light, "use_temperature", False)]
-    _temperatures.update({light.name: light.temperature for light in warm})
+    undo = []
     try:
-        for light in warm:
-            light.use_temperature = False
+        undo = exporter_workarounds(scene)
         with bpy.context.temp_override(scene=scene):
             result = bpy.ops.export_scene.gltf(**options)
+    except RuntimeError as error:
+        raise RuntimeError(exporter_failure(error)) from error
     finally:
-        for light in warm:
-            light.use_temperature = True
+        for step in reversed(undo):
+            step()
         _temperatures.clear()
         _exporting, _world, _holdouts = False, None, set()
     if result != {'FINISHED'}:
         raise RuntimeError(f"Blender's glTF exporter did not finish ({result})")
     add_tracks(scene, pathlib.Path(path))
     return time.perf_counter() - start
+
+
+def exporter_workarounds(scene):
+    """Changes to the scene that keep Blender's bundled glTF exporter from raising, each undone by
+    the function returned with it (in reverse order, after the export), so that nothing of the
+    user's data changes:
+    - a light with a colour temperature raises a TypeError: the temperature is switched off and
+      travels in the extras (`_temperatures`);
+    - a light whose Normalize is off raises a TypeError (the exporter calls `Light.area` with a
+      wrong keyword): it is normalized with its power times its area, the power Cycles gives it;
+    - a node group without a Group Output raises an IndexError: one is added to it (its outputs
+      then give their defaults, as without one)."""
+    undo = []
+    for light in [light for light in bpy.data.lights if getattr(light, "use_temperature", False)]:
+        _temperatures[light.name] = light.temperature
+        light.use_temperature = False
+        undo.append(lambda light=light: setattr(light, "use_temperature", True))
+    # One object a light datablock (its area, where objects that share it are scaled differently).
+    unnormalized = {obj.data: obj for obj in scene.objects if obj.type == 'LIGHT'
+                    and not getattr(obj.data, "normalize", True)}
+    for light, obj in unnormalized.items():
+        energy = light.energy
+        light.energy, light.normalize = animated.power(obj), True
+
+        def restore(light=light, energy=energy):
+            light.energy, light.normalize = energy, False
+        undo.append(restore)
+    for group in groups_without_output():
+        node = group.nodes.new("NodeGroupOutput")
+        undo.append(lambda group=group, node=node: group.nodes.remove(node))
+    return undo
+
+
+def groups_without_output():
+    """The shader node groups that have outputs but no Group Output node."""
+    return [group for group in bpy.data.node_groups if group.bl_idname == 'ShaderNodeTree'
+            and any(item.item_type == 'SOCKET' and item.in_out == 'OUTPUT' for item in group.interface.items_tree)
+            and not any(node.type == 'GROUP_OUTPUT' for node in group.nodes)]
+
+
+def exporter_failure(error):
+    """What to tell the user when Blender's glTF exporter raised `error`: Blender's version, the
+    exception's own last line and where in the exporter it was raised."""
+    lines = [line.strip() for line in str(error).splitlines() if line.strip()]
+    raised = next((line for line in reversed(lines) if re.match(r"^[A-Za-z_.]*(Error|Exception)\b", line)),
+                  lines[-1] if lines else "no message")
+    places = [re.search(r'io_scene_gltf2/(.*?)", line (\d+)', line) for line in lines]
+    place = next((f" in {m.group(1)}:{m.group(2)}" for m in reversed(places) if m), "")
+    return (f"Blender {bpy.app.version_string}'s glTF exporter failed{place}: {raised}. This is a fault of "
+            "Blender's exporter on something in the scene; Caustic worked around the ones it knows (lights "
+            "with a colour temperature or without Normalize, node groups without a Group Output)")
 
 
 def add_tracks(scene, path):

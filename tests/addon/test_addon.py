@@ -525,6 +525,59 @@ class Export(unittest.TestCase):
         self.assertTrue(light.data.use_temperature)
         self.assertEqual(light.data.temperature, 3200.0)
 
+    def test_lights_without_normalize_export_with_the_power_cycles_gives_them(self):
+        """Blender's exporter raises a TypeError on a light whose Normalize is off; the add-on's
+        export succeeds, the point light's intensity and the area light's power are their Power
+        times their area (4 pi r^2 for a point of radius r, the square's side squared), and the
+        lights are left as they were."""
+        scene = glass_sphere_scene()
+        area = bpy.data.objects["Area"]
+        area.data.normalize = False
+        point = add(bpy.ops.object.light_add, type='POINT', location=(1, 1, 2))
+        point.data.energy, point.data.shadow_soft_size, point.data.normalize = 100.0, 0.5, False
+        path = OUT / "unnormalized" / "scene.gltf"
+        path.parent.mkdir()
+        sys.modules["caustic.export"].export(scene, path)
+        gltf = json.loads(path.read_text())
+        nodes = {n["name"]: n for n in gltf["nodes"]}
+        light = gltf["extensions"]["KHR_lights_punctual"]["lights"][nodes[point.name]["extensions"]["KHR_lights_punctual"]["light"]]
+        watts = 100.0 * 4 * math.pi * 0.5 ** 2
+        self.assertAlmostEqual(light["intensity"], watts * 683 / (4 * math.pi), delta=1e-3 * light["intensity"])
+        self.assertAlmostEqual(nodes["Area"]["extras"]["caustic"]["area_light"]["power"], 60.0 * 0.1 ** 2, places=4)
+        self.assertEqual((point.data.energy, point.data.normalize), (100.0, False))
+        self.assertEqual((area.data.energy, area.data.normalize), (60.0, False))
+
+    def test_a_node_group_without_a_group_output_exports_with_a_warning(self):
+        """Blender's exporter raises an IndexError on a material whose node group has no Group
+        Output; the add-on's export succeeds, names the group in a warning, and leaves the group as
+        it was."""
+        scene = glass_sphere_scene()
+        group = bpy.data.node_groups.new("No output", "ShaderNodeTree")
+        group.interface.new_socket("Colour", in_out='OUTPUT', socket_type='NodeSocketColor')
+        floor = bpy.data.materials["Floor"]
+        node = floor.node_tree.nodes.new("ShaderNodeGroup")
+        node.node_tree = group
+        floor.node_tree.links.new(node.outputs[0], floor.node_tree.nodes["Principled BSDF"].inputs["Base Color"])
+        path = OUT / "no-output" / "scene.gltf"
+        path.parent.mkdir()
+        sys.modules["caustic.export"].export(scene, path)
+        self.assertTrue(path.exists())
+        self.assertEqual([n.type for n in group.nodes], [])
+        warnings = sys.modules["caustic.export"].scene_warnings(bpy.context.evaluated_depsgraph_get())
+        self.assertTrue(any("node group 'No output' has no Group Output" in w for w in warnings), warnings)
+
+    def test_an_exporter_failure_names_blender_the_exception_and_where(self):
+        """What Blender's exporter raises reaches the user as one sentence: Blender's version, the
+        exception and the place in the exporter, not a traceback."""
+        traceback = ('Error: Python: Traceback (most recent call last):\n'
+                     '  File "/x/io_scene_gltf2/blender/exp/material/search_node_tree.py", line 85, in f\n'
+                     '    group_output_node = [...][0]\n'
+                     'IndexError: list index out of range\n'
+                     'Location: /x/bpy/ops.py:109')
+        message = sys.modules["caustic.export"].exporter_failure(RuntimeError(traceback))
+        self.assertIn(f"Blender {bpy.app.version_string}'s glTF exporter failed in "
+                      "blender/exp/material/search_node_tree.py:85: IndexError: list index out of range", message)
+
 
 def environment_world(img, rotation_deg=0.0, vector_type='POINT'):
     """A world whose Background (strength 2) shows `img` through a Mapping node turned about Z."""
