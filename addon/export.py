@@ -36,6 +36,10 @@ _world = None
 # While Caustic exports, the names of the objects rendered as holdouts (`holdout_objects`).
 _holdouts = set()
 
+# While Caustic exports, the objects replaced by a copy with their shape keys baked
+# (`bake_shape_keys`): the exporter leaves them out.
+_replaced = set()
+
 # While Caustic exports, the colour temperature (kelvin) of each light that uses one, by name:
 # Blender's exporter raises a TypeError on a light with `use_temperature`, so it is switched off
 # for the export and the temperature travels in the extras (the renderer multiplies the colour
@@ -533,7 +537,8 @@ class glTF2ExportUserExtension:
             return
         in_view_layer = set(bpy.context.view_layer.objects)
         for node in tree.nodes.values():
-            if node.blender_object is not None and node.blender_object not in in_view_layer:
+            if node.blender_object is not None and (node.blender_object not in in_view_layer
+                                                    or node.blender_object.name in _replaced):
                 node.keep_tag = False
 
     def gather_node_hook(self, gltf_node, blender_object, export_settings):
@@ -855,6 +860,7 @@ def export(scene, path):
             step()
         _temperatures.clear()
         _exporting, _world, _holdouts = False, None, set()
+        _replaced.clear()
     if result != {'FINISHED'}:
         raise RuntimeError(f"Blender's glTF exporter did not finish ({result})")
     add_tracks(scene, pathlib.Path(path))
@@ -889,7 +895,73 @@ def exporter_workarounds(scene):
     for group in groups_without_output():
         node = group.nodes.new("NodeGroupOutput")
         undo.append(lambda group=group, node=node: group.nodes.remove(node))
+    for obj in shape_keys_with_modifiers(scene):
+        undo += bake_shape_keys(scene, obj)
     return undo
+
+
+def shape_keys_with_modifiers(scene):
+    """Meshes whose shape keys are animated under modifiers other than an Armature: Blender's
+    exporter applies the modifiers and drops the shape keys (glTF holds one or the other)."""
+    return [obj for obj in scene.objects if obj.type == 'MESH' and obj.data.shape_keys is not None
+            and animated.is_animated(obj.data.shape_keys) and obj.modifiers
+            and all(modifier.type != 'ARMATURE' for modifier in obj.modifiers)]
+
+
+def bake_shape_keys(scene, obj):
+    """Replaces `obj`, for the export, by a copy without modifiers whose mesh is `obj` as Cycles
+    sees it at the first frame and whose shape keys are its shape at every frame (each key's
+    weight 1 at its frame, 0 at the frames beside it, linear between): the modified mesh animates
+    as its shape keys animate it. Returns the steps that undo it; none where the modified mesh
+    changes its vertex count between frames (it is exported as Blender's exporter exports it)."""
+    frames = range(scene.frame_start, scene.frame_end + 1)
+    current = scene.frame_current
+    depsgraph = bpy.context.evaluated_depsgraph_get()
+    shapes, mesh = [], None
+    try:
+        for frame in frames:
+            scene.frame_set(frame)
+            evaluated = obj.evaluated_get(depsgraph)
+            if mesh is None:
+                mesh = bpy.data.meshes.new_from_object(evaluated, preserve_all_data_layers=True, depsgraph=depsgraph)
+            shape = evaluated.to_mesh()
+            positions = [0.0] * (3 * len(shape.vertices))
+            shape.vertices.foreach_get("co", positions)
+            evaluated.to_mesh_clear()
+            if len(positions) != 3 * len(mesh.vertices):
+                bpy.data.meshes.remove(mesh)
+                return []
+            shapes.append(positions)
+    finally:
+        scene.frame_set(current)
+    name = obj.name
+    baked = obj.copy()
+    baked.modifiers.clear()
+    baked.data = mesh
+    for collection in obj.users_collection:
+        collection.objects.link(baked)
+    preferences = bpy.context.preferences.edit
+    interpolation, preferences.keyframe_new_interpolation_type = preferences.keyframe_new_interpolation_type, 'LINEAR'
+    try:
+        baked.shape_key_add(name="Basis")
+        for frame, positions in zip(frames, shapes):
+            block = baked.shape_key_add(name=f"Frame {frame}", from_mix=False)
+            block.data.foreach_set("co", positions)
+            for at, value in ((frame - 1, 0.0), (frame, 1.0), (frame + 1, 0.0)):
+                block.value = value
+                block.keyframe_insert("value", frame=at)
+    finally:
+        preferences.keyframe_new_interpolation_type = interpolation
+    obj.name = f"{name} (modifiers and shape keys)"
+    baked.name = name
+    _replaced.add(obj.name)
+
+    def undo():
+        _replaced.discard(obj.name)
+        bpy.data.objects.remove(baked)
+        bpy.data.meshes.remove(mesh)  # with its shape keys
+        obj.name = name
+    return [undo]
 
 
 def groups_without_output():

@@ -50,6 +50,13 @@ fn addon_packages_install() {
     run_script("test_package.py");
 }
 
+/// Scenes combining at random what Blender shots contain (two dozen seeds; a soak run takes more):
+/// exported through the add-on and rendered with no panic, no non-finite pixel, no unnamed failure.
+#[test]
+fn addon_combinations_export_and_render() {
+    run_script("test_combinations.py");
+}
+
 /// Blender parity: scenes built in bpy, rendered through the add-on, against Cycles' references.
 #[test]
 fn addon_renders_match_cycles() {

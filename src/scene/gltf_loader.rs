@@ -108,7 +108,8 @@ pub fn load(path: &Path) -> Result<Description, SceneError> {
     materials.push(Material::default_grey());
     let animations =
         pointers::read(&document, &buffers, &pointer_channels, &scene_extras.tracks).map_err(fail)?;
-    let rig = rig(&document, &buffers, &animations.nodes).map_err(fail)?;
+    let mut rig_warnings = Vec::new();
+    let rig = rig(&document, &buffers, &animations.nodes, &mut rig_warnings).map_err(fail)?;
     let mut unrendered: Vec<String> = document
         .materials()
         .zip(&materials)
@@ -116,6 +117,7 @@ pub fn load(path: &Path) -> Result<Description, SceneError> {
         .collect();
     unrendered.extend(animations.warnings.iter().cloned());
     unrendered.extend(image_warnings);
+    unrendered.extend(rig_warnings);
     let mut builder = Builder {
         document: &document,
         buffers: &buffers,
@@ -267,6 +269,7 @@ fn rig(
     document: &gltf::Document,
     buffers: &[gltf::buffer::Data],
     pointed: &[(usize, NodeProperty, Keys)],
+    warnings: &mut Vec<String>,
 ) -> Result<Rig, String> {
     let mut nodes: Vec<NodeMotion> = document
         .nodes()
@@ -313,9 +316,13 @@ fn rig(
             NodeProperty::Weights => {
                 let count = morph_target_count(&node);
                 if count == 0 {
-                    return Err(in_node(
-                        "it animates morph target weights, but the node's mesh has no morph targets".into(),
+                    // Blender's exporter writes this for shape keys under modifiers it applied.
+                    warnings.push(in_node(
+                        "it animates morph target weights, but the node's mesh has no morph targets (shape \
+                         keys dropped by modifiers applied on export?): the mesh is rendered unanimated"
+                            .into(),
                     ));
+                    continue;
                 }
                 pointers::check(&keys, count).map_err(in_node)?;
                 let groups = deform::weight_groups(&keys.values, count);

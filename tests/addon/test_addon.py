@@ -331,6 +331,64 @@ class Animation(unittest.TestCase):
         self.assertLess(columns[1] + 5, columns[2])
 
 
+    def test_a_rig_shape_keys_under_a_modifier_a_zoom_and_a_keyed_light_under_a_world(self):
+        """What once crashed the renderer (a keyed light under a world) and lost the shape keys (a
+        modifier over them), in one Render Animation: an armature bending a red column, a green
+        cube growing by its shape key under a Subdivision modifier, a zooming lens and a point
+        light keyed from 200 to 800 W under a grey world. The frames render; the green cube grows
+        (more pixels at frame 3 than at frame 1, beyond the zoom's share, which the column's size
+        gives) and the floor brightens; the user's cube keeps its modifier and shape keys."""
+        scene = glass_sphere_scene()
+        world = bpy.data.worlds.new("Grey")
+        world.node_tree.nodes["Background"].inputs["Color"].default_value = (0.2, 0.2, 0.2, 1.0)
+        scene.world = world
+        for obj in [obj for obj in scene.objects if obj.type == 'LIGHT']:
+            bpy.data.objects.remove(obj)
+        light = add(bpy.ops.object.light_add, type='POINT', location=(0, -1, 3))
+        for frame, watts in ((1, 200.0), (3, 800.0)):
+            light.data.energy = watts
+            light.data.keyframe_insert("energy", frame=frame)
+        cube = add(bpy.ops.mesh.primitive_cube_add, material("Green", (0.05, 0.8, 0.05)), size=0.5,
+                   location=(1.2, 0.5, 0.25))
+        cube.modifiers.new("Subdivision", 'SUBSURF').levels = 1
+        cube.shape_key_add(name="Basis")
+        grow = cube.shape_key_add(name="Grow")
+        for point in grow.data:
+            point.co *= 2.0
+        for frame, value in ((1, 0.0), (3, 1.0)):
+            grow.value = value
+            grow.keyframe_insert("value", frame=frame)
+        column = add(bpy.ops.mesh.primitive_cylinder_add, material("Red", (0.9, 0.05, 0.05)), radius=0.15, depth=1.0,
+                     location=(-1.2, 0.5, 0.5))
+        bpy.ops.object.armature_add(location=(-1.2, 0.5, 0.0))
+        rig = bpy.context.object
+        column.parent = rig
+        group = column.vertex_groups.new(name="Bone")
+        group.add(list(range(len(column.data.vertices))), 1.0, 'REPLACE')
+        column.modifiers.new("Armature", 'ARMATURE').object = rig
+        bone = rig.pose.bones["Bone"]
+        bone.rotation_mode = 'XYZ'
+        for frame, angle in ((1, 0.0), (3, 0.5)):
+            bone.rotation_euler.x = angle
+            bone.keyframe_insert("rotation_euler", index=0, frame=frame)
+        for frame, lens in ((1, 50.0), (3, 55.0)):
+            scene.camera.data.lens = lens
+            scene.camera.data.keyframe_insert("lens", frame=frame)
+        scene.frame_start, scene.frame_end = 1, 3
+        scene.render.filepath = str(OUT / "deform_####")
+        bpy.ops.render.render(animation=True)
+        frames = [read_exr(OUT / f"deform_{frame:04}.exr") for frame in (1, 2, 3)]
+        self.assertTrue(all(np.all(np.isfinite(image)) for image in frames))
+        green = [int(((image[..., 1] > 2 * image[..., 0]) & (image[..., 1] > 2 * image[..., 2])).sum())
+                 for image in frames]
+        print(f"the green cube's pixels in frames 1, 2, 3: {green}")
+        self.assertGreater(green[2], 2.5 * green[0], "the shape key under the modifier did not grow the cube")
+        self.assertGreater(luminance(frames[2]).mean(), 1.5 * luminance(frames[0]).mean())
+        self.assertEqual([m.type for m in cube.modifiers], ['SUBSURF'])
+        self.assertEqual(cube.name, "Cube")
+        self.assertEqual([k.name for k in cube.data.shape_keys.key_blocks], ["Basis", "Grow"])
+
+
 class Cancel(unittest.TestCase):
     def test_cancelling_ends_the_renderer_process(self):
         glass_sphere_scene().caustic.passes = 1_000_000
