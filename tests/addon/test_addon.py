@@ -461,7 +461,7 @@ class Export(unittest.TestCase):
         np.testing.assert_allclose([lens["fstop"], lens["focus_distance"], lens["focal_length_mm"]], [2.8, 4.5, 50.0],
                                    rtol=1e-6)
         glass = next(m for m in gltf["materials"] if m["name"] == "Glass")
-        self.assertEqual(glass["extras"]["caustic"], {"abbe": 30.0})
+        self.assertEqual(glass["extras"]["caustic"], {"abbe": 30.0, "vertex_colours": False})
         # The operator farms run (`blender -b shot.blend --python-expr ...`) writes the same.
         operator_path = OUT / "extras" / "operator" / "scene.gltf"
         self.assertEqual(bpy.ops.caustic.export_scene(filepath=str(operator_path)), {'FINISHED'})
