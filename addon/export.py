@@ -501,6 +501,24 @@ def colour_attributes_read(material, tree=None):
     return read
 
 
+# What Cycles renders of an object's evaluated geometry and Caustic does not, by object type.
+UNRENDERED_GEOMETRY = {'VOLUME': "volume grids", 'CURVES': "hair curves", 'GREASEPENCIL': "grease pencil strokes"}
+
+
+def unrendered_geometry_warnings(depsgraph):
+    """Geometry Cycles renders that Caustic does not, named by the object that holds it (the
+    instancer, for Geometry Nodes output and instances), once an object and kind."""
+    found = set()
+    for instance in depsgraph.object_instances:
+        owner = instance.parent if instance.is_instance and instance.parent is not None else instance.object
+        kind = UNRENDERED_GEOMETRY.get(instance.object.type)
+        if kind is not None and instance.show_self:
+            found.add((owner.name, kind))
+        if instance.object.type == 'POINTCLOUD' and len(instance.object.data.points) > MOST_POINTS:
+            found.add((owner.name, f"points past the first {MOST_POINTS}"))
+    return [f"object '{name}': its {kind} are not rendered (Cycles renders them)" for name, kind in sorted(found)]
+
+
 def colour_attribute_warnings(objects):
     """Meshes whose materials read different colour attributes: glTF carries one set of vertex
     colours a mesh, so every material on it shows the one the exporter picks."""
@@ -532,13 +550,17 @@ class glTF2ExportUserExtension:
 
     def gather_tree_filter_tag_hook(self, tree, export_settings):
         """Leaves out the objects of collections excluded from the view layer (Blender's
-        exporter keeps them: they are not hidden from renders, only excluded)."""
+        exporter keeps them: they are not hidden from renders, only excluded), but not where a
+        collection instance shows them (a collection excluded so that only its instances
+        render), and the objects replaced for the export (`_replaced`)."""
         if not _exporting:
             return
         in_view_layer = set(bpy.context.view_layer.objects)
         for node in tree.nodes.values():
-            if node.blender_object is not None and (node.blender_object not in in_view_layer
-                                                    or node.blender_object.name in _replaced):
+            obj = node.blender_object
+            if obj is None or instanced(tree, node):
+                continue
+            if obj not in in_view_layer or obj.name in _replaced:
                 node.keep_tag = False
 
     def gather_node_hook(self, gltf_node, blender_object, export_settings):
@@ -559,6 +581,18 @@ class glTF2ExportUserExtension:
             complete_layers(gltf_material, blender_material)
             add_volume(gltf_material, blender_material)
             show_missing_base_colour(gltf_material, blender_material)
+
+
+def instanced(tree, node):
+    """Whether the exporter's tree node `node` is inside a collection instance (an ancestor
+    instances a collection)."""
+    uuid = node.parent_uuid
+    while uuid is not None and uuid in tree.nodes:
+        parent = tree.nodes[uuid]
+        if parent.blender_type == type(parent).INST_COLLECTION or getattr(parent.blender_object, "is_instancer", False):
+            return True
+        uuid = parent.parent_uuid
+    return False
 
 
 def volume_node(material):
@@ -820,6 +854,8 @@ def scene_warnings(depsgraph):
     warnings += world_volume_warnings(depsgraph.scene.world)
     warnings += world_image_warnings(depsgraph.scene.world)
     warnings += colour_attribute_warnings(depsgraph.scene.objects)
+    warnings += unrendered_geometry_warnings(depsgraph)
+    warnings += _fallbacks
     warnings += [f"node group '{group.name}' has no Group Output: its outputs give their default values (Blender's "
                  "glTF exporter raises on it; Caustic adds one while it exports)" for group in groups_without_output()]
     warnings += camera_warnings(depsgraph.scene)
@@ -838,7 +874,7 @@ def export(scene, path):
     _world = world_extras(scene.world, pathlib.Path(path).parent)
     _holdouts = holdout_objects(bpy.context.view_layer)
     # One timeline sampled once a frame (LINEAR keys); animated values are sampled by
-    # `add_tracks`, not by the exporter's pointer animation (which raises on rigged scenes).
+    # `finish_file`, not by the exporter's pointer animation (which raises on rigged scenes).
     options = dict(filepath=str(path), export_format='GLTF_SEPARATE', export_cameras=True, export_lights=True,
                    export_extras=True, export_apply=True, export_yup=True, use_renderable=True,
                    use_active_scene=True, export_animations=True, export_animation_mode='SCENE',
@@ -846,15 +882,15 @@ def export(scene, path):
                    # Vertex colours only where a material reads them (by default the exporter
                    # writes the active colour attribute on every mesh, which glTF multiplies in).
                    export_vertex_color='MATERIAL', export_all_vertex_colors=False,
-                   export_active_vertex_color_when_no_material=False)
+                   export_active_vertex_color_when_no_material=False,
+                   # Geometry Nodes output as Cycles renders it, repeated meshes as glTF instances.
+                   export_gn_mesh=True, export_gpu_instances=True)
     _exporting = True
+    _fallbacks.clear()
     undo = []
     try:
         undo = exporter_workarounds(scene)
-        with bpy.context.temp_override(scene=scene):
-            result = bpy.ops.export_scene.gltf(**options)
-    except RuntimeError as error:
-        raise RuntimeError(exporter_failure(error)) from error
+        result = run_exporter(scene, options)
     finally:
         for step in reversed(undo):
             step()
@@ -863,8 +899,32 @@ def export(scene, path):
         _replaced.clear()
     if result != {'FINISHED'}:
         raise RuntimeError(f"Blender's glTF exporter did not finish ({result})")
-    add_tracks(scene, pathlib.Path(path))
+    finish_file(scene, pathlib.Path(path))
     return time.perf_counter() - start
+
+
+# What the last export left out because Blender's exporter failed with it (`run_exporter`).
+_fallbacks = []
+
+
+def run_exporter(scene, options):
+    """Runs Blender's glTF exporter with `options`. Where it raises with Geometry Nodes instances
+    (it can on animated scenes: a KeyError in its sampling cache), it runs once more without
+    them, and `_fallbacks` says so; a failure it cannot get past is named (`exporter_failure`)."""
+    with bpy.context.temp_override(scene=scene):
+        try:
+            return bpy.ops.export_scene.gltf(**options)
+        except RuntimeError as error:
+            if not options.get("export_gn_mesh"):
+                raise RuntimeError(exporter_failure(error)) from error
+            first = error
+        try:
+            result = bpy.ops.export_scene.gltf(**{**options, "export_gn_mesh": False})
+        except RuntimeError:
+            raise RuntimeError(exporter_failure(first)) from first
+    _fallbacks.append(f"{exporter_failure(first).split('. This is')[0]}; the scene was exported again without "
+                      "Geometry Nodes instances, which are not rendered")
+    return result
 
 
 def exporter_workarounds(scene):
@@ -897,7 +957,76 @@ def exporter_workarounds(scene):
         undo.append(lambda group=group, node=node: group.nodes.remove(node))
     for obj in shape_keys_with_modifiers(scene):
         undo += bake_shape_keys(scene, obj)
+    undo += point_clouds_as_spheres(scene)
     return undo
+
+
+# The most points of one point cloud rendered as spheres.
+MOST_POINTS = 100_000
+
+
+def point_clouds_as_spheres(scene):
+    """Every point cloud Cycles renders (a Point Cloud object, or one a Geometry Nodes modifier
+    makes), which Blender's exporter drops, as a mesh of spheres of each point's radius (shaded
+    smooth), in an object of its own for the export, with the point cloud's material. Returns the
+    steps that remove them."""
+    found = []
+    # Read while the depsgraph is iterated, made after: new data would change the depsgraph.
+    for instance in bpy.context.evaluated_depsgraph_get().object_instances:
+        if instance.object.type != 'POINTCLOUD' or len(instance.object.data.points) == 0:
+            continue
+        owner = instance.parent if instance.is_instance and instance.parent is not None else instance.object
+        # Cycles shades points without a material of their own with its default surface.
+        material = next((m.original for m in instance.object.data.materials if m is not None), None)
+        found.append((f"{owner.name} points", sphere_geometry(instance.object.data), material,
+                      instance.matrix_world.copy()))
+    undo = []
+    for name, (vertices, faces), material, matrix in found:
+        mesh = bpy.data.meshes.new(name)
+        mesh.from_pydata(vertices, [], faces)
+        mesh.shade_smooth()
+        if material is not None:
+            mesh.materials.append(material)
+        obj = bpy.data.objects.new(name, mesh)
+        scene.collection.objects.link(obj)
+        obj.matrix_world = matrix
+
+        def remove(obj=obj, mesh=mesh):
+            bpy.data.objects.remove(obj)
+            bpy.data.meshes.remove(mesh)
+        undo.append(remove)
+    return undo
+
+
+def sphere_geometry(points, rings=12, segments=24):
+    """The vertices and faces of one UV sphere a point of `points` (a PointCloud), of the point's
+    radius."""
+    import numpy as np
+    count = min(len(points.points), MOST_POINTS)
+    # Finer spheres where there are few: a 12 x 6 sphere renders a point about 4% dark.
+    rings, segments = (rings, segments) if count <= 10_000 else (6, 12)
+    centres = np.empty(len(points.points) * 3, np.float32)
+    points.attributes["position"].data.foreach_get("vector", centres)
+    radii = np.full(len(points.points), 0.01, np.float32)
+    if "radius" in points.attributes:
+        points.attributes["radius"].data.foreach_get("value", radii)
+    centres, radii = centres.reshape(-1, 3)[:count], radii[:count]
+    theta = np.linspace(0.0, math.pi, rings + 1)[1:-1]
+    phi = np.linspace(0.0, 2 * math.pi, segments, endpoint=False)
+    ring = np.stack([np.outer(np.sin(theta), np.cos(phi)), np.outer(np.sin(theta), np.sin(phi)),
+                     np.outer(np.cos(theta), np.ones_like(phi))], axis=-1).reshape(-1, 3)
+    unit = np.concatenate([[[0.0, 0.0, 1.0]], ring, [[0.0, 0.0, -1.0]]])
+    faces = []
+    for s in range(segments):
+        t = (s + 1) % segments
+        faces.append((0, 1 + s, 1 + t))
+        for r in range(rings - 2):
+            a, b = 1 + r * segments, 1 + (r + 1) * segments
+            faces.append((a + s, b + s, b + t, a + t))
+        last = 1 + (rings - 2) * segments
+        faces.append((last + t, last + s, len(unit) - 1))
+    vertices = (centres[:, None, :] + radii[:, None, None] * unit[None, :, :]).reshape(-1, 3)
+    return vertices.tolist(), [tuple(v + p * len(unit) for v in f) for p in range(count) for f in faces]
 
 
 def shape_keys_with_modifiers(scene):
@@ -984,18 +1113,40 @@ def exporter_failure(error):
             "with a colour temperature or without Normalize, node groups without a Group Output)")
 
 
-def add_tracks(scene, path):
-    """Adds the scene's animated values (`animated.tracks`) to the exported file's scene extras."""
+def finish_file(scene, path):
+    """Adds the scene's animated values (`animated.tracks`) to the exported file's scene extras,
+    and drops the animation channels Blender's exporter writes for nodes it did not write (the
+    Geometry Nodes instances it folds into `EXT_mesh_gpu_instancing`, which move with their
+    node)."""
     gltf = json.loads(path.read_text())
     found = animated.tracks(scene, gltf)
-    if not found:
+    dropped = drop_dangling_channels(gltf)
+    if not found and not dropped:
         return
-    scene_index = gltf.get("scene", 0)
-    extras = gltf["scenes"][scene_index].setdefault("extras", {})
-    extras.setdefault("caustic", {})["tracks"] = found
+    if found:
+        scene_index = gltf.get("scene", 0)
+        extras = gltf["scenes"][scene_index].setdefault("extras", {})
+        extras.setdefault("caustic", {})["tracks"] = found
     partial = path.with_suffix(".gltf.partial")
     partial.write_text(json.dumps(gltf))
     os.replace(partial, path)
+
+
+def drop_dangling_channels(gltf):
+    """Removes the animation channels whose target node the file does not have (and animations
+    left without channels); returns how many channels it removed."""
+    nodes = len(gltf.get("nodes", []))
+    dropped = 0
+    for animation in gltf.get("animations", []):
+        channels = animation.get("channels", [])
+        kept = [c for c in channels if c.get("target", {}).get("node", 0) < nodes]
+        dropped += len(channels) - len(kept)
+        animation["channels"] = kept
+    if dropped:
+        gltf["animations"] = [a for a in gltf["animations"] if a["channels"]]
+        if not gltf["animations"]:
+            del gltf["animations"]
+    return dropped
 
 
 class CAUSTIC_OT_export_scene(bpy.types.Operator):

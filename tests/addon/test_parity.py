@@ -272,6 +272,9 @@ class Parity(unittest.TestCase):
     def test_attributes_and_images(self):
         self.check("attributes_and_images")
 
+    def test_instances_and_points(self):
+        self.check("instances_and_points")
+
 
 if __name__ == "__main__":
     enable_addon(BINARY)
