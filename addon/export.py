@@ -581,6 +581,7 @@ class glTF2ExportUserExtension:
             complete_layers(gltf_material, blender_material)
             add_volume(gltf_material, blender_material)
             show_missing_base_colour(gltf_material, blender_material)
+            move_normal_map_strength(gltf_material)
 
 
 def instanced(tree, node):
@@ -709,6 +710,19 @@ def unreadable_images(material):
         return []
     return [node for node in tree.nodes if node.type == 'TEX_IMAGE' and node.image is not None
             and any(output.is_linked for output in node.outputs) and not readable(node.image)]
+
+
+def move_normal_map_strength(gltf_material):
+    """Blender's exporter writes a Normal Map node's Strength as `normalTexture.scale`, which
+    scales the normal's x and y; Cycles moves the mapped normal from the smooth one by the
+    strength instead. The strength travels in the extras (`normal_map_strength`), the scale is 1."""
+    normal = gltf_material.normal_texture
+    scale = getattr(normal, "scale", None) if normal is not None else None
+    if scale is None or scale == 1.0:
+        return
+    normal.scale = None
+    extras = gltf_material.extras if isinstance(gltf_material.extras, dict) else {}
+    gltf_material.extras = {**extras, "caustic": {**extras.get("caustic", {}), "normal_map_strength": scale}}
 
 
 def show_missing_base_colour(gltf_material, material):

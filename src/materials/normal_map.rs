@@ -25,13 +25,18 @@ use super::{ShadingFrame, SurfaceInputs};
 use crate::texture::DataTexture;
 
 /// A tangent-space normal map (glTF `normalTexture`): RGB in [0, 1] to a normal in [-1, 1], x
-/// and y scaled by `scale`.
+/// and y scaled by `scale`, and by `strength` as Blender's Normal Map node scales them.
 #[derive(Clone, Debug)]
 pub struct NormalMap {
     /// The image.
     pub texture: Arc<DataTexture>,
     /// glTF's `normalTexture.scale`.
     pub scale: f32,
+    /// Blender's Normal Map Strength (the `caustic.normal_map_strength` extras; 1 when absent):
+    /// as Cycles applies it in tangent space, x and y times the strength and z moved toward 1 by
+    /// one minus the strength where it is under 1. From 1 up that is glTF's scale; under 1 glTF
+    /// keeps z, which tilts the normal further than Cycles does.
+    pub strength: f32,
 }
 
 impl NormalMap {
@@ -48,7 +53,8 @@ impl NormalMap {
         let t = (t - n * n.dot(t)).normalize_or_zero();
         let b = n.cross(t) * inputs.tangent.w.signum();
         let texel = self.texture.eval(&inputs.uv) * 2.0 - Vec4::ONE;
-        let local = Vec3::new(texel.x * self.scale, texel.y * self.scale, texel.z);
+        let (xy, z) = (self.scale * self.strength, 1.0 + (texel.z - 1.0) * self.strength.clamp(0.0, 1.0));
+        let local = Vec3::new(texel.x * xy, texel.y * xy, z);
         let bent = (t * local.x + b * local.y + n * local.z).normalize_or_zero();
         if bent == Vec3::ZERO || !bent.is_finite() || bent.dot(frame.ng()) * n.dot(frame.ng()) <= 0.0 {
             return frame;

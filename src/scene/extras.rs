@@ -181,6 +181,8 @@ pub struct MaterialExtras {
     pub holdout: bool,
     /// The medium that fills it (in place of `KHR_materials_volume`'s absorption).
     pub medium: Option<MediumExtras>,
+    /// Blender's Normal Map Strength for `normalTexture` (see `NormalMap::strength`).
+    pub normal_map_strength: Option<f32>,
     /// Whether it reads the mesh's vertex colours (`COLOR_0`): false where Blender's material has
     /// no Color Attribute node (glTF's rule, true, when not given).
     pub vertex_colours: Option<bool>,

@@ -45,8 +45,12 @@ pub fn material(m: &gltf::Material, document: &gltf::Document, images: &Images) 
         AlphaMode::Mask => Alpha::Mask { cutoff: m.alpha_cutoff().unwrap_or(0.5), coverage: coverage()? },
         AlphaMode::Blend => Alpha::Blend { coverage: coverage()? },
     };
+    let extras: MaterialExtras =
+        extras::parse(m.extras()).map_err(|e| in_material(format!("extras `caustic`: {e}")))?;
+    let normal_strength = extras.normal_map_strength.filter(|s| s.is_finite()).map_or(1.0, |s| s.max(0.0));
     let normal_map = match m.normal_texture().and_then(|n| Some((normal_map(&n)?, n))) {
         Some((map, normal)) => Some(NormalMap {
+            strength: normal_strength,
             texture: Arc::new(DataTexture::new(image(normal.texture()), map)),
             scale: if normal.scale().is_finite() { normal.scale() } else { 1.0 },
         }),
@@ -62,8 +66,6 @@ pub fn material(m: &gltf::Material, document: &gltf::Document, images: &Images) 
     let specular = specular(m, &image);
     let clearcoat = clearcoat(m, document, images).map_err(in_material)?;
     let sheen = sheen(m, document, images).map_err(in_material)?;
-    let extras: MaterialExtras =
-        extras::parse(m.extras()).map_err(|e| in_material(format!("extras `caustic`: {e}")))?;
     let volume = match &extras.medium {
         Some(extras) => Some(medium(extras).map_err(|e| in_material(format!("extras `caustic.medium.{e}")))?),
         None => volume(m).map_err(in_material)?,
@@ -145,7 +147,11 @@ fn clearcoat(
         factor_texture: texture_only("clearcoatTexture")?,
         roughness: unit_factor(value, "clearcoatRoughnessFactor", 0.0),
         roughness_texture: texture_only("clearcoatRoughnessTexture")?,
-        normal_map: texture("clearcoatNormalTexture")?.map(|(texture, scale)| NormalMap { texture, scale }),
+        normal_map: texture("clearcoatNormalTexture")?.map(|(texture, scale)| NormalMap {
+            texture,
+            scale,
+            strength: 1.0,
+        }),
     }))
 }
 

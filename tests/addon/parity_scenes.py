@@ -163,13 +163,15 @@ def metal_with_map():
     return m
 
 
-def bumpy():
-    """A grey material whose Normal Map node tilts the normal along u and v in a pattern."""
-    m = principled("Bumpy", Base_Color=(0.6, 0.6, 0.6, 1.0), Roughness=0.9)
+def bumpy(name="Bumpy", strength=1.0, coat=0.0):
+    """A grey material whose Normal Map node (of `strength`) tilts the normal along u and v in a
+    pattern, under a coat of weight `coat`."""
+    m = principled(name, Base_Color=(0.6, 0.6, 0.6, 1.0), Roughness=0.9, Coat_Weight=coat)
     nodes, links = m.node_tree.nodes, m.node_tree.links
     tilt = lambda x, y: (0.5 + (0.3 if x % 32 < 16 else -0.3), 0.5 + (0.3 if y % 32 < 16 else -0.3), 0.8, 1)
     tex = texture_node(m, image("normals", 64, 64, tilt, 'Non-Color'))
     normal_map = nodes.new("ShaderNodeNormalMap")
+    normal_map.inputs["Strength"].default_value = strength
     links.new(tex.outputs["Color"], normal_map.inputs["Color"])
     links.new(normal_map.outputs["Normal"], nodes["Principled BSDF"].inputs["Normal"])
     return m
@@ -360,6 +362,19 @@ def normal_mapped():
     cube.rotation_euler = (0.0, 0.0, math.radians(30))
     camera((0.0, -7.0, 3.5), (0.0, 0.0, 0.8))
     return {"Floor": 1, "Bumpy": 3}
+
+
+def normal_map_strengths():
+    """Three normal-mapped cubes: at strength 1 and 2 under Blender's default coat, and at
+    strength 0.5 without a coat (where Cycles' strength and glTF's scale differ)."""
+    clear()
+    studio(principled("Floor", Base_Color=(0.5, 0.5, 0.5, 1.0)))
+    for i, (strength, coat) in enumerate(((1.0, 1.0), (2.0, 1.0), (0.5, 0.0))):
+        cube = add(bpy.ops.mesh.primitive_cube_add, bumpy(f"Strength {strength:g} coat {coat:g}", strength, coat),
+                   index=2 + i, size=1.2, location=(-1.8 + 1.8 * i, 0.3, 0.6))
+        cube.rotation_euler = (0.0, 0.0, math.radians(30))
+    camera((0.0, -7.0, 3.5), (0.0, 0.3, 0.5))
+    return {"Floor": 1, "Strength 1 coated": 2, "Strength 2 coated": 3, "Strength 0.5": 4}
 
 
 def coated():
@@ -927,4 +942,5 @@ SCENES = {"glass": glass, "principled_spheres": principled_spheres, "textured": 
           "panorama_camera": panorama_camera, "film_and_holdouts": film_and_holdouts,
           "spot_light": spot_light, "soft_spot": soft_spot, "sky": sky, "lights_seen": lights_seen,
           "spread_light": spread_light, "soft_falloff": soft_falloff, "rigged": rigged, "animated": animated,
-          "attributes_and_images": attributes_and_images, "instances_and_points": instances_and_points}
+          "attributes_and_images": attributes_and_images, "instances_and_points": instances_and_points,
+          "normal_map_strengths": normal_map_strengths}

@@ -275,6 +275,9 @@ class Parity(unittest.TestCase):
     def test_instances_and_points(self):
         self.check("instances_and_points")
 
+    def test_normal_map_strengths(self):
+        self.check("normal_map_strengths")
+
 
 if __name__ == "__main__":
     enable_addon(BINARY)
