@@ -582,6 +582,7 @@ class glTF2ExportUserExtension:
             add_volume(gltf_material, blender_material)
             show_missing_base_colour(gltf_material, blender_material)
             move_normal_map_strength(gltf_material)
+            convert_simple_surface(gltf_material, blender_material)
 
 
 def instanced(tree, node):
@@ -712,6 +713,60 @@ def unreadable_images(material):
             and any(output.is_linked for output in node.outputs) and not readable(node.image)]
 
 
+# The surfaces other than the Principled BSDF that Caustic renders as one (Blender's exporter
+# writes nothing for them: glTF's default, a rough white metal): what each becomes, as
+# (metallic, transmission, whether it keeps a specular layer).
+SIMPLE_SURFACES = {'BSDF_DIFFUSE': (0.0, 0.0, False), 'BSDF_GLOSSY': (1.0, 0.0, True),
+                   'BSDF_GLASS': (0.0, 1.0, True)}
+
+
+def convert_simple_surface(gltf_material, material):
+    """Writes a Diffuse, Glossy or Glass BSDF as the Principled BSDF that renders as it does in
+    Cycles: a Diffuse BSDF a Lambertian of its colour (no specular layer), a Glossy BSDF a metal of
+    its colour and roughness, a Glass BSDF a transmissive dielectric of its colour, roughness and
+    IOR. Linked inputs keep their unlinked values (`material_warnings` says so)."""
+    from io_scene_gltf2.io.com.gltf2_io import MaterialPBRMetallicRoughness
+    from io_scene_gltf2.io.com.gltf2_io_extensions import Extension
+    surface = surface_node(material)
+    if surface is None or surface.type not in SIMPLE_SURFACES:
+        return
+    metallic, transmission, specular = SIMPLE_SURFACES[surface.type]
+    colour = list(surface.inputs["Color"].default_value)[:3] + [1.0]
+    roughness = surface.inputs["Roughness"].default_value if "Roughness" in surface.inputs else 1.0
+    if surface.type == 'BSDF_DIFFUSE':
+        roughness = 1.0
+    gltf_material.pbr_metallic_roughness = MaterialPBRMetallicRoughness(
+        base_color_factor=colour, base_color_texture=None, extensions=None, extras=None,
+        metallic_factor=metallic, metallic_roughness_texture=None, roughness_factor=roughness)
+    extensions = gltf_material.extensions or {}
+    if not specular:
+        extensions["KHR_materials_specular"] = Extension("KHR_materials_specular", {"specularFactor": 0.0},
+                                                         required=False)
+    if transmission:
+        extensions["KHR_materials_transmission"] = Extension(
+            "KHR_materials_transmission", {"transmissionFactor": transmission}, required=False)
+        extensions["KHR_materials_ior"] = Extension("KHR_materials_ior", {"ior": surface.inputs["IOR"].default_value},
+                                                    required=False)
+    gltf_material.extensions = extensions or None
+
+
+def surface_warnings(material, surface):
+    """What of a surface other than the Principled BSDF Caustic does not render, as sentences."""
+    name = f"material '{material.name}'"
+    if surface.type in SIMPLE_SURFACES:
+        linked = [socket.name for socket in surface.inputs if socket.is_linked and socket.name != "Weight"]
+        return [f"{name}: the {surface.name}'s {socket} is linked; its unlinked value is rendered" for socket in linked]
+    if surface.type == 'EMISSION':
+        return []
+    lost = {'MIX_SHADER': "the mix of its shaders (Blender's exporter keeps none of them)",
+            'ADD_SHADER': "the sum of its shaders (Blender's exporter keeps none of them)",
+            'BSDF_TRANSPARENT': "its transparency", 'BSDF_TRANSLUCENT': "its translucency",
+            'BSDF_SHEEN': "its sheen", 'BSDF_TOON': "its toon shading", 'SUBSURFACE_SCATTERING': "its subsurface scattering",
+            'GROUP': "the node group's shading"}.get(surface.type, f"its {surface.name}")
+    return [f"{name}: {lost} is not rendered; the surface renders as glTF's default (a rough white metal), "
+            "as Blender's glTF exporter writes it: use a Principled BSDF"]
+
+
 def move_normal_map_strength(gltf_material):
     """Blender's exporter writes a Normal Map node's Strength as `normalTexture.scale`, which
     scales the normal's x and y; Cycles moves the mapped normal from the smooth one by the
@@ -835,8 +890,7 @@ def material_warnings(material):
     if surface.type == 'HOLDOUT':
         return volume_warnings(material)
     if surface.type != 'BSDF_PRINCIPLED':
-        return [f"material '{material.name}': only the Principled BSDF is supported ({surface.name} is exported "
-                "as Blender's glTF exporter sees it)"] + volume_warnings(material)
+        return surface_warnings(material, surface) + volume_warnings(material)
     warnings = volume_warnings(material)
     for name, neutral in IGNORED_INPUTS.items():
         socket = surface.inputs.get(name)

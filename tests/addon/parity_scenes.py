@@ -377,6 +377,33 @@ def normal_map_strengths():
     return {"Floor": 1, "Strength 1 coated": 2, "Strength 2 coated": 3, "Strength 0.5": 4}
 
 
+def surface_of(name, kind, **inputs):
+    """A material whose surface is a `kind` shader node (not a Principled BSDF) of `inputs`."""
+    m = bpy.data.materials.new(name)
+    nodes = m.node_tree.nodes
+    nodes.remove(nodes["Principled BSDF"])
+    node = nodes.new(kind)
+    for socket, value in inputs.items():
+        node.inputs[socket].default_value = value
+    m.node_tree.links.new(node.outputs[0], nodes["Material Output"].inputs["Surface"])
+    return m
+
+
+def simple_surfaces():
+    """A Diffuse BSDF cube and a Glossy BSDF ball (roughness 0.3, gold-tinted): Blender's exporter
+    writes neither (glTF's default, a rough white metal); the add-on writes what Cycles renders."""
+    clear()
+    studio(principled("Floor", Base_Color=(0.5, 0.5, 0.5, 1.0)))
+    add(bpy.ops.mesh.primitive_cube_add, surface_of("Diffuse", "ShaderNodeBsdfDiffuse", Color=(0.2, 0.45, 0.8, 1.0)),
+        index=2, size=1.4, location=(-1.1, 0.3, 0.7))
+    add(bpy.ops.mesh.primitive_uv_sphere_add, surface_of("Glossy", "ShaderNodeBsdfGlossy", Color=(0.9, 0.7, 0.3, 1.0),
+                                                         Roughness=0.3),
+        index=3, segments=64, ring_count=32, radius=0.8, location=(1.1, 0.3, 0.8))
+    bpy.ops.object.shade_smooth()
+    camera((0.0, -7.0, 3.5), (0.0, 0.3, 0.6))
+    return {"Floor": 1, "Diffuse": 2, "Glossy": 3}
+
+
 def coated():
     """Two clear-coated spheres on the default floor: a red one under Blender's default coat
     (weight 1, roughness 0.03: a near mirror over a rough base) and a blue one under half a rough
@@ -943,4 +970,4 @@ SCENES = {"glass": glass, "principled_spheres": principled_spheres, "textured": 
           "spot_light": spot_light, "soft_spot": soft_spot, "sky": sky, "lights_seen": lights_seen,
           "spread_light": spread_light, "soft_falloff": soft_falloff, "rigged": rigged, "animated": animated,
           "attributes_and_images": attributes_and_images, "instances_and_points": instances_and_points,
-          "normal_map_strengths": normal_map_strengths}
+          "normal_map_strengths": normal_map_strengths, "simple_surfaces": simple_surfaces}

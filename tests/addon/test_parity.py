@@ -278,6 +278,9 @@ class Parity(unittest.TestCase):
     def test_normal_map_strengths(self):
         self.check("normal_map_strengths")
 
+    def test_simple_surfaces(self):
+        self.check("simple_surfaces")
+
 
 if __name__ == "__main__":
     enable_addon(BINARY)
