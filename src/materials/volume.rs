@@ -33,8 +33,25 @@ enum Absorption {
     /// `KHR_materials_volume`'s attenuation colour (a reflectance spectrum) reached at `distance`
     /// (positive, finite).
     Attenuation { colour: RgbSpectrum, distance: f32 },
-    /// A coefficient per world unit.
+    /// A coefficient per world unit (grey: the same at every wavelength).
     Coefficient(RgbSpectrum),
+}
+
+impl Absorption {
+    /// Absorption of the coefficient `rgb` per world unit (each at least 0), as the transmittance
+    /// it gives over the length at which its strongest channel keeps 1/e, upsampled as a
+    /// reflectance and taken back to a coefficient: light through that length keeps the colour
+    /// per-channel Beer-Lambert gives (as Cycles absorbs), and near it nearly so. Upsampling the
+    /// coefficient itself kept the colour of neither (a tinted slab passed 11% too much blue).
+    fn of_coefficient(rgb: Vec3) -> Self {
+        let strongest = rgb.max_element();
+        if !(strongest > 0.0) || rgb.max_element() - rgb.min_element() <= 1e-6 * strongest {
+            return Absorption::Coefficient(RgbSpectrum::constant(strongest.max(0.0)));
+        }
+        let distance = 1.0 / strongest;
+        let colour = (-rgb * distance).exp();
+        Absorption::Attenuation { colour: RgbSpectrum::reflectance(colour), distance }
+    }
 }
 
 /// How a volume scatters.
@@ -60,11 +77,7 @@ impl Volume {
     pub fn medium(absorption: Vec3, scattering: Vec3, anisotropy: f32, thickness: f32) -> Self {
         let scattering = (scattering.max_element() > 0.0)
             .then(|| Scattering { coefficient: RgbSpectrum::illuminant(scattering), anisotropy });
-        Volume {
-            absorption: Absorption::Coefficient(RgbSpectrum::illuminant(absorption)),
-            scattering,
-            thickness,
-        }
+        Volume { absorption: Absorption::of_coefficient(absorption), scattering, thickness }
     }
 
     /// The absorption coefficient at the wavelengths `lambda`, per world unit.
@@ -147,5 +160,45 @@ mod tests {
         let lambda = Wavelengths { nm: Vec4::new(450.0, 530.0, 610.0, 650.0), ..lambda };
         let (s, _) = blue.scattering(&lambda).unwrap();
         assert!(s.x > 1.0 && s.z < 0.5 * s.x, "blue fog scatters blue most: {s}");
+    }
+
+    /// The colour (under D65) of white light through `volume` over `length`.
+    fn colour_through(volume: &Volume, length: f32) -> Vec3 {
+        crate::spectrum::rgb::colour_under_d65_of(|nm| {
+            let lambda = Wavelengths { nm: Vec4::splat(nm), ..Wavelengths::sampled(0.5) };
+            volume.transmittance(&lambda, length).x
+        })
+    }
+
+    /// A medium's absorption passes the colour per-channel Beer-Lambert gives (Cycles' absorption):
+    /// within 0.1% per channel at the length where its strongest channel keeps 1/e, and within
+    /// 1.5% from a quarter of that length up, on absorptions across the gamut (the slab of a
+    /// Volume Absorption of colour (0.85, 0.55, 0.25) and density 8 among them: 11% too much blue
+    /// came through it before). Beyond that length one spectrum drifts from per-channel
+    /// Beer-Lambert, because Rec.709's channels overlap in wavelength: at twice it by up to 18% in
+    /// a channel that keeps under 2% of the light, at four times by more.
+    #[test]
+    fn absorption_keeps_the_colour_per_channel_beer_lambert_gives() {
+        let absorptions = [
+            Vec3::new(1.2, 3.6, 6.0),
+            Vec3::new(0.5, 1.0, 2.0),
+            Vec3::new(2.0, 0.7, 0.4),
+            Vec3::new(0.4, 0.3, 1.0),
+            Vec3::new(1.0, 2.0, 1.0),
+        ];
+        for absorption in absorptions {
+            let volume = Volume::medium(absorption, Vec3::ZERO, 0.0, 0.0);
+            let reference = 1.0 / absorption.max_element();
+            for (scale, tolerance) in [(0.25, 0.015), (0.5, 0.015), (1.0, 0.001)] {
+                let length = scale * reference;
+                let got = colour_through(&volume, length);
+                let want = (-absorption * length).exp();
+                let off = (got / want - Vec3::ONE).abs().max_element();
+                assert!(
+                    off < tolerance,
+                    "{absorption} over {length}: {got}, Beer-Lambert {want} ({off:.3} off)"
+                );
+            }
+        }
     }
 }

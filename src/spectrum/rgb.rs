@@ -210,8 +210,12 @@ fn fit_coefficients(target: DVec3) -> [f32; 3] {
 
 /// The linear Rec.709 colour of `spectrum` times D65 (what a white light reflects off it).
 pub fn colour_under_d65(spectrum: &RgbSpectrum) -> Vec3 {
-    let xyz: DVec3 =
-        table_wavelengths().map(|l| cmf(l).as_dvec3() * f64::from(d65(l) * spectrum.eval(l))).sum();
+    colour_under_d65_of(|l| spectrum.eval(l))
+}
+
+/// The linear Rec.709 colour of the spectrum `value` (of the wavelength, nm) times D65.
+pub fn colour_under_d65_of(value: impl Fn(f32) -> f32) -> Vec3 {
+    let xyz: DVec3 = table_wavelengths().map(|l| cmf(l).as_dvec3() * f64::from(d65(l) * value(l))).sum();
     xyz_to_linear_rec709(xyz).as_vec3()
 }
 
