@@ -750,6 +750,50 @@ def convert_simple_surface(gltf_material, material):
     gltf_material.extensions = extensions or None
 
 
+# Nodes Blender's glTF exporter turns into glTF (images, their coordinates and channels, normal
+# maps, colour attributes, alpha's rounding); a Principled input fed through any other is not
+# written as Cycles shades it.
+EXPORTED_NODES = {'TEX_IMAGE', 'MAPPING', 'UVMAP', 'TEX_COORD', 'SEPARATE_COLOR', 'SEPARATE_RGB', 'NORMAL_MAP',
+                  'VERTEX_COLOR', 'REROUTE', 'MATH'}
+
+# The Principled inputs whose node trees are checked.
+TEXTURED_INPUTS = ("Base Color", "Metallic", "Roughness", "Alpha", "Normal", "Emission Color", "Coat Weight",
+                   "Coat Roughness", "Coat Normal", "Transmission Weight", "Specular Tint", "Sheen Tint")
+
+
+def unexported_nodes(socket, seen=None):
+    """The nodes upstream of `socket` that Blender's exporter does not turn into glTF."""
+    seen = set() if seen is None else seen
+    found = []
+    for link in socket.links:
+        node = link.from_node
+        if node.name in seen:
+            continue
+        seen.add(node.name)
+        if node.type not in EXPORTED_NODES:
+            found.append(node)
+        for upstream in node.inputs:
+            found += unexported_nodes(upstream, seen)
+    return found
+
+
+def procedural_input_warnings(material):
+    """Principled inputs fed by nodes glTF cannot hold (procedural textures, ColorRamp, Mix, Bump),
+    named with the nodes: Blender's exporter writes their unlinked value or nothing."""
+    surface = principled_node(material)
+    if surface is None:
+        return []
+    warnings = []
+    for name in TEXTURED_INPUTS:
+        socket = surface.inputs.get(name)
+        nodes = unexported_nodes(socket) if socket is not None and socket.is_linked else []
+        if nodes:
+            kinds = ", ".join(sorted({node.bl_label or node.type for node in nodes}))
+            warnings.append(f"material '{material.name}': its {name} comes through nodes glTF cannot hold ({kinds}); "
+                            "it is rendered as Blender's glTF exporter writes it (without them), not as Cycles shades it")
+    return warnings
+
+
 def surface_warnings(material, surface):
     """What of a surface other than the Principled BSDF Caustic does not render, as sentences."""
     name = f"material '{material.name}'"
@@ -891,7 +935,7 @@ def material_warnings(material):
         return volume_warnings(material)
     if surface.type != 'BSDF_PRINCIPLED':
         return surface_warnings(material, surface) + volume_warnings(material)
-    warnings = volume_warnings(material)
+    warnings = volume_warnings(material) + procedural_input_warnings(material)
     for name, neutral in IGNORED_INPUTS.items():
         socket = surface.inputs.get(name)
         if socket is not None and (socket.is_linked or abs(socket.default_value - neutral) > 1e-6):

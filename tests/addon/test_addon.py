@@ -624,6 +624,25 @@ class Export(unittest.TestCase):
         warnings = sys.modules["caustic.export"].scene_warnings(bpy.context.evaluated_depsgraph_get())
         self.assertTrue(any("node group 'No output' has no Group Output" in w for w in warnings), warnings)
 
+    def test_procedural_inputs_and_other_surfaces_are_named(self):
+        """A Checker Texture through a ColorRamp on the Base Color, and a Mix Shader surface, are
+        named in warnings that say what is not rendered; an Image Texture through a Mapping node
+        is not."""
+        glass_sphere_scene()
+        floor = bpy.data.materials["Floor"]
+        nodes, links = floor.node_tree.nodes, floor.node_tree.links
+        checker, ramp = nodes.new("ShaderNodeTexChecker"), nodes.new("ShaderNodeValToRGB")
+        links.new(checker.outputs["Fac"], ramp.inputs["Fac"])
+        links.new(ramp.outputs["Color"], nodes["Principled BSDF"].inputs["Base Color"])
+        mixed = bpy.data.materials["Glass"]
+        mix = mixed.node_tree.nodes.new("ShaderNodeMixShader")
+        mixed.node_tree.links.new(mix.outputs[0], mixed.node_tree.nodes["Material Output"].inputs["Surface"])
+        warnings = sys.modules["caustic.export"].scene_warnings(bpy.context.evaluated_depsgraph_get())
+        self.assertIn("material 'Floor': its Base Color comes through nodes glTF cannot hold (Checker Texture, "
+                      "Color Ramp); it is rendered as Blender's glTF exporter writes it (without them), not as "
+                      "Cycles shades it", warnings)
+        self.assertTrue(any(w.startswith("material 'Glass': the mix of its shaders") for w in warnings), warnings)
+
     def test_an_exporter_failure_names_blender_the_exception_and_where(self):
         """What Blender's exporter raises reaches the user as one sentence: Blender's version, the
         exception and the place in the exporter, not a traceback."""
