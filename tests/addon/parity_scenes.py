@@ -278,10 +278,17 @@ def attributes_and_images():
             "WebP": 7}
 
 
-def geometry_nodes(host, points, material):
+def bind_to_bone(obj, rig):
+    """Skins `obj` wholly to the bone "Bone" of armature object `rig`."""
+    group = obj.vertex_groups.new(name="Bone")
+    group.add(list(range(len(obj.data.vertices))), 1.0, 'REPLACE')
+    obj.modifiers.new("Armature", 'ARMATURE').object = rig
+
+
+def geometry_nodes(host, points, material, realize=False):
     """A Geometry Nodes modifier on `host`: 0.6 m cubes instanced on its vertices (left as
-    instances), or its vertices as a point cloud of radius 0.22, of `material` (a Set Material
-    node)."""
+    instances, or realized), or its vertices as a point cloud of radius 0.22, of `material` (a Set
+    Material node)."""
     tree = bpy.data.node_groups.new("Points" if points else "Scatter", 'GeometryNodeTree')
     tree.interface.new_socket("Geometry", in_out='INPUT', socket_type='NodeSocketGeometry')
     tree.interface.new_socket("Geometry", in_out='OUTPUT', socket_type='NodeSocketGeometry')
@@ -304,7 +311,12 @@ def geometry_nodes(host, points, material):
         links.new(cube.outputs["Mesh"], painted.inputs["Geometry"])
         links.new(given.outputs[0], made.inputs["Points"])
         links.new(painted.outputs["Geometry"], made.inputs["Instance"])
-        links.new(made.outputs["Instances"], out.inputs[0])
+        if realize:
+            realized = nodes.new('GeometryNodeRealizeInstances')
+            links.new(made.outputs["Instances"], realized.inputs["Geometry"])
+            links.new(realized.outputs["Geometry"], out.inputs[0])
+        else:
+            links.new(made.outputs["Instances"], out.inputs[0])
     host.modifiers.new("Geometry Nodes", 'NODES').node_group = tree
 
 

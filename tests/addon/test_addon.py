@@ -28,6 +28,7 @@ from bpy_extras.object_utils import world_to_camera_view  # noqa: E402
 
 ROOT = pathlib.Path(__file__).resolve().parents[2]
 sys.path.insert(0, str(ROOT / "tests" / "addon"))
+import parity_scenes  # noqa: E402
 from enable_addon import enable_addon  # noqa: E402
 
 BINARY = os.environ["CAUSTIC_BINARY"]
@@ -363,9 +364,7 @@ class Animation(unittest.TestCase):
         bpy.ops.object.armature_add(location=(-1.2, 0.5, 0.0))
         rig = bpy.context.object
         column.parent = rig
-        group = column.vertex_groups.new(name="Bone")
-        group.add(list(range(len(column.data.vertices))), 1.0, 'REPLACE')
-        column.modifiers.new("Armature", 'ARMATURE').object = rig
+        parity_scenes.bind_to_bone(column, rig)
         bone = rig.pose.bones["Bone"]
         bone.rotation_mode = 'XYZ'
         for frame, angle in ((1, 0.0), (3, 0.5)):

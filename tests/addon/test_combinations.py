@@ -34,6 +34,7 @@ import numpy as np  # noqa: E402
 import OpenEXR  # noqa: E402
 
 sys.path.insert(0, str(pathlib.Path(__file__).resolve().parent))
+import parity_scenes  # noqa: E402
 from enable_addon import enable_addon  # noqa: E402
 
 BINARY = os.environ["CAUSTIC_BINARY"]
@@ -242,9 +243,7 @@ def add_skinned(rng, collection=None):
     bpy.ops.object.mode_set(mode='OBJECT')
     body = mesh_object("Skinned", "cylinder", collection, location=(0, 0, 0.5))
     body.parent = rig
-    group = body.vertex_groups.new(name="Bone")
-    group.add(list(range(len(body.data.vertices))), 1.0, 'REPLACE')
-    body.modifiers.new("Armature", 'ARMATURE').object = rig
+    parity_scenes.bind_to_bone(body, rig)
     pose = rig.pose.bones["Bone"]
     pose.rotation_mode = 'XYZ'
     key(pose, "rotation_euler", [0.0, 0.6], index=0)
@@ -260,34 +259,6 @@ def add_shape_keys(rng, obj):
     key(bulge, "value", [0.0, 1.0])
     if rng.random() < 0.5:
         obj.modifiers.new("Subdivision", 'SUBSURF').levels = 1
-
-
-def add_geometry_nodes(rng, obj, points):
-    """A Geometry Nodes modifier on `obj`: cubes instanced on its points, or its points as a point
-    cloud."""
-    tree = bpy.data.node_groups.new("Scatter", 'GeometryNodeTree')
-    tree.interface.new_socket("Geometry", in_out='INPUT', socket_type='NodeSocketGeometry')
-    tree.interface.new_socket("Geometry", in_out='OUTPUT', socket_type='NodeSocketGeometry')
-    nodes, links = tree.nodes, tree.links
-    given, out = nodes.new('NodeGroupInput'), nodes.new('NodeGroupOutput')
-    if points:
-        to_points = nodes.new('GeometryNodeMeshToPoints')
-        to_points.inputs["Radius"].default_value = 0.1
-        links.new(given.outputs[0], to_points.inputs["Mesh"])
-        links.new(to_points.outputs["Points"], out.inputs[0])
-    else:
-        instance = nodes.new('GeometryNodeInstanceOnPoints')
-        cube = nodes.new('GeometryNodeMeshCube')
-        cube.inputs["Size"].default_value = (0.2, 0.2, 0.2)
-        links.new(given.outputs[0], instance.inputs["Points"])
-        links.new(cube.outputs["Mesh"], instance.inputs["Instance"])
-        if rng.random() < 0.5:
-            realize = nodes.new('GeometryNodeRealizeInstances')
-            links.new(instance.outputs["Instances"], realize.inputs["Geometry"])
-            links.new(realize.outputs["Geometry"], out.inputs[0])
-        else:
-            links.new(instance.outputs["Instances"], out.inputs[0])
-    obj.modifiers.new("Geometry Nodes", 'NODES').node_group = tree
 
 
 def add_collection_instances(rng, scene, material):
@@ -349,7 +320,7 @@ def build(seed):
             obj.modifiers.new("Bevel", 'BEVEL')
             holds.append("modifier")
         if rng.random() < 0.2:
-            add_geometry_nodes(rng, obj, points=rng.random() < 0.4)
+            parity_scenes.geometry_nodes(obj, rng.random() < 0.4, material, realize=rng.random() < 0.5)
             holds.append("geometry nodes")
         if rng.random() < 0.15:
             obj.is_holdout = True
