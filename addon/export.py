@@ -16,8 +16,11 @@ temperature have it switched off while the exporter runs (it raises on them) and
 import json
 import math
 import os
-import re
 import pathlib
+import re
+import shutil
+import subprocess
+import sys
 import tempfile
 import time
 
@@ -229,9 +232,6 @@ def bake_world(world, folder, width=BAKED_WORLD_WIDTH):
     name. The world travels in a .blend of its own. A bake is kept in WORLD_CACHE under the
     world's fingerprint, so that rendering again (F12 after F12, each frame of an animation) does
     not bake again until something the bake shows changes."""
-    import shutil
-    import subprocess
-    import sys
     image = folder / "world.exr"
     cached = WORLD_CACHE / f"{world_fingerprint(world, width)}.exr"
     if cached.exists():
@@ -240,21 +240,29 @@ def bake_world(world, folder, width=BAKED_WORLD_WIDTH):
     blend = folder / "world.blend"
     # Absolute paths: images the world uses by paths relative to the user's .blend still load.
     bpy.data.libraries.write(str(blend), {world}, fake_user=True, path_remap='ABSOLUTE')
-    script = pathlib.Path(__file__).resolve().parent / "bake_world.py"
-    arguments = ["--", str(blend), world.name, str(image), str(width)]
-    if bpy.app.binary_path:
-        command = [bpy.app.binary_path, "--background", "--factory-startup", "--python", str(script), *arguments]
-    else:  # Blender as a Python module: its Python imports bpy
-        command = [sys.executable, str(script), *arguments]
-    done = subprocess.run(command, capture_output=True, text=True)
+    done = run_blender_script("bake_world.py", [str(blend), world.name, str(image), str(width)])
     if done.returncode != 0 or not image.exists():
-        reason = (done.stderr or done.stdout).strip().splitlines()[-1:] or ["no output"]
-        raise RuntimeError(f"Blender could not bake world '{world.name}' into an image: {reason[0]}")
+        raise RuntimeError(f"Blender could not bake world '{world.name}' into an image: {last_line(done)}")
     WORLD_CACHE.mkdir(parents=True, exist_ok=True)
     partial = cached.with_suffix(f".{os.getpid()}.part")
     shutil.copyfile(image, partial)
     partial.replace(cached)
     return image.name
+
+
+def run_blender_script(script, arguments):
+    """Runs `script` (beside this file) in a separate Blender, with `arguments` after "--"."""
+    path = pathlib.Path(__file__).resolve().parent / script
+    if bpy.app.binary_path:
+        command = [bpy.app.binary_path, "--background", "--factory-startup", "--python", str(path), "--", *arguments]
+    else:  # Blender as a Python module: its Python imports bpy
+        command = [sys.executable, str(path), "--", *arguments]
+    return subprocess.run(command, capture_output=True, text=True)
+
+
+def last_line(done):
+    """The last line a finished process printed, for messages."""
+    return ((done.stderr or done.stdout).strip().splitlines()[-1:] or ["no output"])[0]
 
 
 # Where baked worlds are kept between renders (the system's temporary folder: a cache, not data).
@@ -777,9 +785,10 @@ def unexported_nodes(socket, seen=None):
     return found
 
 
-def procedural_input_warnings(material):
+def procedural_input_warnings(material, baked):
     """Principled inputs fed by nodes glTF cannot hold (procedural textures, ColorRamp, Mix, Bump),
-    named with the nodes: Blender's exporter writes their unlinked value or nothing."""
+    named with the nodes: baked into images where they are among `baked` (`procedural_bakes`), else
+    as Blender's exporter writes them (their unlinked value or nothing)."""
     surface = principled_node(material)
     if surface is None:
         return []
@@ -787,10 +796,15 @@ def procedural_input_warnings(material):
     for name in TEXTURED_INPUTS:
         socket = surface.inputs.get(name)
         nodes = unexported_nodes(socket) if socket is not None and socket.is_linked else []
-        if nodes:
-            kinds = ", ".join(sorted({node.bl_label or node.type for node in nodes}))
-            warnings.append(f"material '{material.name}': its {name} comes through nodes glTF cannot hold ({kinds}); "
-                            "it is rendered as Blender's glTF exporter writes it (without them), not as Cycles shades it")
+        if not nodes:
+            continue
+        kinds = ", ".join(sorted({node.bl_label or node.type for node in nodes}))
+        where = f"material '{material.name}': its {name} comes through nodes glTF cannot hold ({kinds}); "
+        if name in BAKED_INPUTS and any(m == material and n == name for _, m, n in baked):
+            warnings.append(where + "Blender bakes it into an image (Render Properties > Caustic > Bake Size)")
+        else:
+            warnings.append(where + "it is rendered as Blender's glTF exporter writes it (without them), "
+                                    "not as Cycles shades it")
     return warnings
 
 
@@ -926,8 +940,8 @@ def volume_warnings(material):
     return [] if node is None else volume_node_warnings(node, f"material '{material.name}'")
 
 
-def material_warnings(material):
-    """What of `material` Caustic does not render, as sentences."""
+def material_warnings(material, baked=()):
+    """What of `material` Caustic does not render, as sentences (`baked`: `procedural_bakes`)."""
     surface = surface_node(material)
     if surface is None:
         return volume_warnings(material)
@@ -935,7 +949,7 @@ def material_warnings(material):
         return volume_warnings(material)
     if surface.type != 'BSDF_PRINCIPLED':
         return surface_warnings(material, surface) + volume_warnings(material)
-    warnings = volume_warnings(material) + procedural_input_warnings(material)
+    warnings = volume_warnings(material) + procedural_input_warnings(material, baked)
     for name, neutral in IGNORED_INPUTS.items():
         socket = surface.inputs.get(name)
         if socket is not None and (socket.is_linked or abs(socket.default_value - neutral) > 1e-6):
@@ -961,7 +975,8 @@ def scene_warnings(depsgraph):
     """What of the scene Caustic does not render, once per material."""
     materials = {slot.material for obj in depsgraph.scene.objects if obj.type == 'MESH'
                  for slot in obj.material_slots if slot.material is not None}
-    warnings = [w for m in sorted(materials, key=lambda m: m.name) for w in material_warnings(m)]
+    baked = procedural_bakes(depsgraph.scene)
+    warnings = [w for m in sorted(materials, key=lambda m: m.name) for w in material_warnings(m, baked)]
     warnings += [w for m in sorted(materials, key=lambda m: m.name) for w in missing_image_warnings(m)]
     warnings += world_volume_warnings(depsgraph.scene.world)
     warnings += world_image_warnings(depsgraph.scene.world)
@@ -1070,7 +1085,71 @@ def exporter_workarounds(scene):
     for obj in shape_keys_with_modifiers(scene):
         undo += bake_shape_keys(scene, obj)
     undo += point_clouds_as_spheres(scene)
+    undo += bake_procedural_inputs(scene)
     return undo
+
+
+# The Principled inputs that are baked where nodes glTF cannot hold feed them.
+BAKED_INPUTS = ("Base Color", "Metallic", "Roughness", "Emission Color")
+
+
+def procedural_bakes(scene):
+    """(object, material, input) for each Principled input of BAKED_INPUTS fed through nodes glTF
+    cannot hold, on the first mesh with texture coordinates that uses its material."""
+    found, seen = [], set()
+    for obj in scene.objects:
+        if obj.type != 'MESH' or not obj.data.uv_layers:
+            continue
+        for material in {slot.material for slot in obj.material_slots if slot.material is not None}:
+            surface = principled_node(material)
+            if surface is None or material.name in seen:
+                continue
+            inputs = [name for name in BAKED_INPUTS if unexported_nodes(surface.inputs[name])]
+            if inputs:
+                seen.add(material.name)
+                found += [(obj, material, name) for name in inputs]
+    return found
+
+
+def bake_procedural_inputs(scene):
+    """Bakes the inputs `procedural_bakes` finds into images (in a separate Blender:
+    bake_inputs.py) at the scene's Bake Size, and feeds each input its image for the export.
+    Returns the steps that restore the materials."""
+    jobs = procedural_bakes(scene)
+    if not jobs:
+        return []
+    folder = pathlib.Path(tempfile.mkdtemp(prefix="caustic-bake-"))
+    blend = folder / "objects.blend"
+    bpy.data.libraries.write(str(blend), {obj for obj, _, _ in jobs}, fake_user=True, path_remap='ABSOLUTE')
+    size = scene.caustic.bake_size
+    listed = [{"object": obj.name, "material": material.name, "input": name, "out": str(folder / f"{i}.png"),
+               "size": size} for i, (obj, material, name) in enumerate(jobs)]
+    (folder / "jobs.json").write_text(json.dumps(listed))
+    done = run_blender_script("bake_inputs.py", [str(blend), str(folder / "jobs.json")])
+    undo = [lambda: shutil.rmtree(folder, ignore_errors=True)]
+    if done.returncode != 0:
+        _fallbacks.append(f"Blender could not bake the material inputs glTF cannot hold: {last_line(done)}")
+        return undo
+    return undo + [use_image(material, name, job["out"]) for job, (_, material, name) in zip(listed, jobs)]
+
+
+def use_image(material, name, path):
+    """Feeds the Principled input `name` of `material` the image at `path` (linear values) in
+    place of what fed it; returns the step that puts the original link back."""
+    tree = material.node_tree
+    socket = principled_node(material).inputs[name]
+    original = socket.links[0].from_socket
+    image = bpy.data.images.load(path)
+    image.colorspace_settings.name = 'Non-Color'
+    node = tree.nodes.new("ShaderNodeTexImage")
+    node.image = image
+    tree.links.new(node.outputs["Color"], socket)
+
+    def restore():
+        tree.nodes.remove(node)
+        tree.links.new(original, socket)
+        bpy.data.images.remove(image)
+    return restore
 
 
 # The most points of one point cloud rendered as spheres.

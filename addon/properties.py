@@ -91,6 +91,9 @@ class CausticRenderSettings(bpy.types.PropertyGroup):
                                      "(2/3 for Photon Mapping, 0.8 for Connection and Merging)")
     seed: IntProperty(name="Seed", default=1, min=0, description="The same seed gives the same image")
     threads: IntProperty(name="Threads", default=0, min=0, max=256, description="Worker threads (0: all cores)")
+    bake_size: IntProperty(name="Bake Size", default=512, min=16, max=8192, subtype='PIXEL',
+                           description="Width and height of the images Blender bakes of material inputs glTF "
+                                       "cannot hold (procedural textures, ColorRamp, Mix nodes)")
     denoise: BoolProperty(name="Denoise", default=False, update=denoise_changed,
                           description="Write the Denoising Albedo and Denoising Normal passes and denoise the render "
                                       "with Blender's Denoise node (Open Image Denoise) in the compositor (set up "

@@ -43,6 +43,7 @@ class RENDER_PT_caustic_sampling(CausticPanel, bpy.types.Panel):
         layout.prop(settings, "seed")
         layout.prop(settings, "threads")
         layout.prop(settings, "denoise")
+        layout.prop(settings, "bake_size")
 
 
 class MATERIAL_PT_caustic_glass(CausticPanel, bpy.types.Panel):

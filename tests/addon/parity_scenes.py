@@ -416,6 +416,40 @@ def simple_surfaces():
     return {"Floor": 1, "Diffuse": 2, "Glossy": 3}
 
 
+def procedural_material(name, ramp=False):
+    """A Principled material whose Base Color is a Checker Texture (red and white), or a Noise
+    Texture through a ColorRamp (blue to yellow): nodes glTF cannot hold."""
+    m = principled(name, Roughness=0.6)
+    nodes, links = m.node_tree.nodes, m.node_tree.links
+    if ramp:
+        noise, colours = nodes.new("ShaderNodeTexNoise"), nodes.new("ShaderNodeValToRGB")
+        noise.inputs["Scale"].default_value = 3.0
+        colours.color_ramp.elements[0].color = (0.05, 0.1, 0.8, 1.0)
+        colours.color_ramp.elements[1].color = (0.9, 0.8, 0.1, 1.0)
+        links.new(noise.outputs["Fac"], colours.inputs["Fac"])
+        source = colours.outputs["Color"]
+    else:
+        checker = nodes.new("ShaderNodeTexChecker")
+        checker.inputs["Color1"].default_value, checker.inputs["Color2"].default_value = (0.8, 0.1, 0.1, 1), (0.9, 0.9, 0.9, 1)
+        checker.inputs["Scale"].default_value = 3.0
+        source = checker.outputs["Color"]
+    links.new(source, nodes["Principled BSDF"].inputs["Base Color"])
+    return m
+
+
+def baked_textures():
+    """A cube with a Checker Texture and a ball with a Noise Texture through a ColorRamp on their
+    Base Color, which the add-on has Blender bake into images."""
+    clear()
+    studio(principled("Floor", Base_Color=(0.5, 0.5, 0.5, 1.0)))
+    add(bpy.ops.mesh.primitive_cube_add, procedural_material("Checker"), index=2, size=1.4, location=(-1.1, 0.3, 0.7))
+    add(bpy.ops.mesh.primitive_uv_sphere_add, procedural_material("Noise ramp", ramp=True), index=3, segments=64,
+        ring_count=32, radius=0.8, location=(1.1, 0.3, 0.8))
+    bpy.ops.object.shade_smooth()
+    camera((0.0, -7.0, 3.5), (0.0, 0.3, 0.6))
+    return {"Floor": 1, "Checker": 2, "Noise ramp": 3}
+
+
 def coated():
     """Two clear-coated spheres on the default floor: a red one under Blender's default coat
     (weight 1, roughness 0.03: a near mirror over a rough base) and a blue one under half a rough
@@ -982,4 +1016,5 @@ SCENES = {"glass": glass, "principled_spheres": principled_spheres, "textured": 
           "spot_light": spot_light, "soft_spot": soft_spot, "sky": sky, "lights_seen": lights_seen,
           "spread_light": spread_light, "soft_falloff": soft_falloff, "rigged": rigged, "animated": animated,
           "attributes_and_images": attributes_and_images, "instances_and_points": instances_and_points,
-          "normal_map_strengths": normal_map_strengths, "simple_surfaces": simple_surfaces}
+          "normal_map_strengths": normal_map_strengths, "simple_surfaces": simple_surfaces,
+          "baked_textures": baked_textures}

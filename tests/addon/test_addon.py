@@ -623,10 +623,10 @@ class Export(unittest.TestCase):
         warnings = sys.modules["caustic.export"].scene_warnings(bpy.context.evaluated_depsgraph_get())
         self.assertTrue(any("node group 'No output' has no Group Output" in w for w in warnings), warnings)
 
-    def test_procedural_inputs_and_other_surfaces_are_named(self):
-        """A Checker Texture through a ColorRamp on the Base Color, and a Mix Shader surface, are
-        named in warnings that say what is not rendered; an Image Texture through a Mapping node
-        is not."""
+    def test_procedural_inputs_are_baked_and_other_surfaces_named(self):
+        """A Checker Texture through a ColorRamp on the Base Color is baked by Blender into the
+        image the exported material reads (the user's material keeps its nodes), and named; a Mix
+        Shader surface is named in a warning that says what is not rendered."""
         glass_sphere_scene()
         floor = bpy.data.materials["Floor"]
         nodes, links = floor.node_tree.nodes, floor.node_tree.links
@@ -638,9 +638,19 @@ class Export(unittest.TestCase):
         mixed.node_tree.links.new(mix.outputs[0], mixed.node_tree.nodes["Material Output"].inputs["Surface"])
         warnings = sys.modules["caustic.export"].scene_warnings(bpy.context.evaluated_depsgraph_get())
         self.assertIn("material 'Floor': its Base Color comes through nodes glTF cannot hold (Checker Texture, "
-                      "Color Ramp); it is rendered as Blender's glTF exporter writes it (without them), not as "
-                      "Cycles shades it", warnings)
+                      "Color Ramp); Blender bakes it into an image (Render Properties > Caustic > Bake Size)",
+                      warnings)
         self.assertTrue(any(w.startswith("material 'Glass': the mix of its shaders") for w in warnings), warnings)
+        before = sorted(n.name for n in nodes)
+        path = OUT / "baked-inputs" / "scene.gltf"
+        path.parent.mkdir()
+        sys.modules["caustic.export"].export(bpy.context.scene, path)
+        gltf = json.loads(path.read_text())
+        floor_material = next(m for m in gltf["materials"] if m["name"] == "Floor")
+        texture = floor_material["pbrMetallicRoughness"]["baseColorTexture"]["index"]
+        image = gltf["images"][gltf["textures"][texture]["source"]]
+        self.assertEqual(image["extras"]["caustic"]["colour_space"], "linear")
+        self.assertEqual(sorted(n.name for n in nodes), before, "the user's material keeps its nodes")
 
     def test_an_exporter_failure_names_blender_the_exception_and_where(self):
         """What Blender's exporter raises reaches the user as one sentence: Blender's version, the

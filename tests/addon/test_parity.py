@@ -281,6 +281,9 @@ class Parity(unittest.TestCase):
     def test_simple_surfaces(self):
         self.check("simple_surfaces")
 
+    def test_baked_textures(self):
+        self.check("baked_textures")
+
 
 if __name__ == "__main__":
     enable_addon(BINARY)
