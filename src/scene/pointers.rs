@@ -97,17 +97,17 @@ pub fn prepare(bytes: &[u8]) -> Result<(Cow<'_, [u8]>, Vec<PointerChannel>), Str
     if is_glb {
         let glb = glb.map_or_else(|| gltf::Glb::from_slice(bytes), Ok);
         let glb = glb.map_err(|e| format!("not a valid GLB file: {e}"))?;
-        let (json, channels) = strip_json(&glb.json)?;
+        let (json, channels) = prepare_json(&glb.json)?;
         let out = gltf::Glb { json: Cow::Owned(json), ..glb };
         let bytes = out.to_vec().map_err(|e| format!("cannot rewrite the GLB container: {e}"))?;
         return Ok((Cow::Owned(bytes), channels));
     }
-    let (json, channels) = strip_json(bytes)?;
+    let (json, channels) = prepare_json(bytes)?;
     Ok((Cow::Owned(json), channels))
 }
 
 /// `json` as [`prepare`] leaves it, and the pointer channels.
-fn strip_json(json: &[u8]) -> Result<(Vec<u8>, Vec<PointerChannel>), String> {
+fn prepare_json(json: &[u8]) -> Result<(Vec<u8>, Vec<PointerChannel>), String> {
     let mut root: Value =
         serde_json::from_slice(json).map_err(|e| format!("not a valid glTF file (malformed JSON): {e}"))?;
     let mut found = Vec::new();
