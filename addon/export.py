@@ -566,9 +566,9 @@ class glTF2ExportUserExtension:
         in_view_layer = set(bpy.context.view_layer.objects)
         for node in tree.nodes.values():
             obj = node.blender_object
-            if obj is None or instanced(tree, node):
-                continue
-            if obj not in in_view_layer or obj.name in _replaced:
+            if obj is None:
+                node.keep_tag = node.keep_tag and not exported_twice(tree, node)
+            elif not instanced(tree, node) and (obj not in in_view_layer or obj.name in _replaced):
                 node.keep_tag = False
 
     def gather_node_hook(self, gltf_node, blender_object, export_settings):
@@ -591,6 +591,23 @@ class glTF2ExportUserExtension:
             show_missing_base_colour(gltf_material, blender_material)
             move_normal_map_strength(gltf_material)
             convert_simple_surface(gltf_material, blender_material)
+
+
+# Objects Blender evaluates to a mesh that its glTF exporter writes itself (a curve, text, a
+# surface): with Geometry Nodes export on, it writes that mesh a second time as an instance.
+CONVERTED_TYPES = {'CURVE', 'FONT', 'SURFACE'}
+
+
+def exported_twice(tree, node):
+    """Whether the exporter's tree node `node` (one it made for a Geometry Nodes instance) repeats
+    what it writes anyway, and would render over it: a curve's, text's or surface's own mesh, or
+    the instances of an object instancing on its vertices or faces (written as duplis too)."""
+    parent = tree.nodes.get(node.parent_uuid) if node.parent_uuid is not None else None
+    owner = getattr(parent, "blender_object", None)
+    if owner is not None and owner.type in CONVERTED_TYPES and isinstance(node.data, bpy.types.Mesh):
+        return True
+    host = getattr(node, "original_object", None)
+    return host is not None and host.instance_type in ('VERTS', 'FACES')
 
 
 def instanced(tree, node):

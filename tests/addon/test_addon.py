@@ -6,6 +6,7 @@ HOME, as a user would enable it; each test builds its scene in bpy and renders t
 with `bpy.ops.render.render()`, then reads the pixels Blender saved.
 """
 
+import collections
 import json
 import math
 import re
@@ -651,6 +652,33 @@ class Export(unittest.TestCase):
         image = gltf["images"][gltf["textures"][texture]["source"]]
         self.assertEqual(image["extras"]["caustic"]["colour_space"], "linear")
         self.assertEqual(sorted(n.name for n in nodes), before, "the user's material keeps its nodes")
+
+    def test_curves_text_metaballs_and_vertex_instances_are_written_once(self):
+        """What Blender evaluates to meshes (a bevelled curve, extruded text, a metaball) and a cube
+        instanced on a plane's four vertices are each written once: with Geometry Nodes output on,
+        Blender's exporter wrote the curve's and the text's meshes twice and the four cubes twice
+        (surfaces over surfaces)."""
+        scene = clear_scene()
+        plane = add(bpy.ops.mesh.primitive_plane_add, size=2)
+        cube = add(bpy.ops.mesh.primitive_cube_add, size=0.2)
+        cube.parent, plane.instance_type = plane, 'VERTS'
+        add(bpy.ops.object.metaball_add, location=(3, 0, 0))
+        curve = add(bpy.ops.curve.primitive_bezier_circle_add, location=(-3, 0, 0))
+        curve.data.bevel_depth = 0.1
+        text = add(bpy.ops.object.text_add, location=(0, 3, 0))
+        text.data.extrude = 0.05
+        camera((0, -8, 5), (0, 0, 0))
+        path = OUT / "written-once" / "scene.gltf"
+        path.parent.mkdir()
+        sys.modules["caustic.export"].export(scene, path)
+        gltf = json.loads(path.read_text())
+        drawn = collections.Counter()
+        for node in gltf["nodes"]:
+            if "mesh" in node:
+                instancing = node.get("extensions", {}).get("EXT_mesh_gpu_instancing")
+                count = gltf["accessors"][instancing["attributes"]["TRANSLATION"]]["count"] if instancing else 1
+                drawn[gltf["meshes"][node["mesh"]]["name"]] += count
+        self.assertEqual(drawn, {"Plane": 1, "Cube": 4, "BézierCircle": 1, "Text": 1, "Mesh": 1}, drawn)
 
     def test_an_exporter_failure_names_blender_the_exception_and_where(self):
         """What Blender's exporter raises reaches the user as one sentence: Blender's version, the
