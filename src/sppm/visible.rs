@@ -30,7 +30,7 @@ use super::media::Media;
 use super::medium_light::in_scattered;
 use super::renderer::{PassSamples, PassStats, Renderer, VisiblePoint, MAX_DEPTH};
 use crate::geometry::offset_origin;
-use crate::materials::{transmittance, Bsdf, Lobe, Transport};
+use crate::materials::{Bsdf, Lobe, Transport, Volume};
 use crate::sampling::{pixel_stream, PixelSampler};
 use crate::scene::Surface;
 use crate::spectrum::{hero_only, SampledSpectrum, Wavelengths};
@@ -191,16 +191,16 @@ pub fn continue_eye_path(
         let hit = renderer.accel.intersect(state.origin.into(), state.direction.into(), f32::INFINITY);
         let length = hit.map_or(f32::INFINITY, |h| h.t);
         watch(EyeEvent::Segment(&state, length));
-        let extinction = match renderer.has_volumes {
+        let medium = match renderer.has_volumes {
             true => through_medium(renderer, &pass.wavelengths, &mut state, length),
             false => None,
         };
         if !state.lights_sampled && !scene.sphere_lights.is_empty() {
             state.radiance +=
-                state.beta * spheres_seen(renderer, &state, (length, extinction), &pass.wavelengths);
+                state.beta * spheres_seen(renderer, &state, (length, medium), &pass.wavelengths);
         }
-        if let Some(extinction) = extinction {
-            state.beta *= transmittance(extinction, length);
+        if let Some(medium) = medium {
+            state.beta *= medium.transmittance(&pass.wavelengths, length);
         }
         let Some(hit) = hit else {
             if state.camera_ray && scene.transparent_film {
@@ -280,7 +280,7 @@ pub fn continue_eye_path(
 fn spheres_seen(
     renderer: &Renderer,
     state: &EyeState,
-    (length, extinction): (f32, Option<SampledSpectrum>),
+    (length, medium): (f32, Option<&Volume>),
     lambda: &Wavelengths,
 ) -> SampledSpectrum {
     let direction = Vec3::from(state.direction);
@@ -290,23 +290,23 @@ fn spheres_seen(
         .filter(|(_, sphere, _)| sphere.seen_by_camera || !state.camera_ray)
         .map(|(_, sphere, t)| {
             sphere.radiance(-direction, lambda)
-                * extinction.map_or(SampledSpectrum::ONE, |e| transmittance(e, t))
+                * medium.map_or(SampledSpectrum::ONE, |m| m.transmittance(lambda, t))
         })
         .sum()
 }
 
-/// The extinction coefficient of the medium the eye path of `state` runs through along its segment
-/// of `length` (`None` outside media). In one that scatters, the direct light it
+/// The medium the eye path of `state` runs through along its segment of `length` (`None` outside
+/// media). In one that scatters, the direct light it
 /// scatters toward the path along the segment is added to the path's radiance; the light it
 /// scatters there that has scattered before is the photons', gathered along the segment as a
 /// beam (`beams.rs`).
 #[inline(always)]
-fn through_medium(
-    renderer: &Renderer,
+fn through_medium<'s>(
+    renderer: &Renderer<'s>,
     lambda: &Wavelengths,
     state: &mut EyeState,
     length: f32,
-) -> Option<SampledSpectrum> {
+) -> Option<&'s Volume> {
     let volume = state.media.medium(renderer.scene)?;
     if volume.scatters() {
         let rng = &mut state.rng;
@@ -314,7 +314,7 @@ fn through_medium(
         let segment = (state.origin.into(), state.direction.into(), length);
         state.radiance += state.beta * in_scattered(renderer, lambda, segment, volume, u);
     }
-    Some(volume.extinction(lambda))
+    Some(volume)
 }
 
 /// The radiance of an eye path: what it found before its visible point plus the direct light
