@@ -419,8 +419,13 @@ impl Material {
                 }
             }
         }
-        let (bsdf, w) = self.opaque_bsdf(inputs, reflectance, shading.n(), wo, lambda, u);
-        Lobe { frame: shading, bsdf, weight: weight * w, over }
+        let glossy = shading.for_glossy(wo);
+        let (bsdf, w) = self.opaque_bsdf(inputs, reflectance, glossy.n(), wo, lambda, u);
+        let frame = match bsdf {
+            Bsdf::Conductor { .. } | Bsdf::RoughConductor { .. } | Bsdf::Mirror { .. } => glossy,
+            _ => shading,
+        };
+        Lobe { frame, bsdf, weight: weight * w, over }
     }
 
     /// Where alpha cuts the surface away (`u_lobe` beyond the opacity), `None`; else `u_lobe`

@@ -266,7 +266,7 @@ impl Bsdf {
         match *self {
             Bsdf::Diffuse { .. } => diffuse::pdf(n, wi),
             Bsdf::RoughConductor { alpha, .. } => conductor::pdf_rough(alpha, n, wo, wi),
-            Bsdf::Plastic { base, f0, eta, alpha } => Plastic::new(base, f0, eta, alpha).pdf(n, wo, wi),
+            Bsdf::Plastic { base, f0, eta, alpha } => Plastic::new(base, f0, eta, alpha).pdf(frame, wo, wi),
             Bsdf::Sheen { roughness, .. } => sheen::pdf(roughness, n, wo, wi),
             Bsdf::RoughDielectric { ior, alpha, tint } => {
                 RoughDielectric { ior, alpha, tint }.pdf(frame, wo, wi)
@@ -383,6 +383,22 @@ impl ShadingFrame {
         } else {
             self.n()
         }
+    }
+
+    /// The frame whose shading normal glossy lobes take seen from `wo`: this one without a
+    /// normal map, else the bent normal tilted back as far as the mirror image of `wo` needs to
+    /// leave the surface ([`normal_map::valid_reflection`]).
+    pub fn for_glossy(&self, wo: Vec3) -> Self {
+        if !self.is_bent() {
+            return *self;
+        }
+        let n = self.toward(wo);
+        let valid = normal_map::valid_reflection(n, face_toward(self.ng(), wo), wo);
+        if valid == n {
+            return *self;
+        }
+        let n = if self.smooth().dot(wo) < 0.0 { -valid } else { valid };
+        ShadingFrame::bent(n, self.ng(), self.smooth())
     }
 
     /// The factor on diffuse light arriving from `wi`: 1 without a normal map, else its

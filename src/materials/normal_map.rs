@@ -13,6 +13,10 @@
 //!   Shadowing Function to Solve the Bump Terminator Problem", Ray Tracing Gems, 2019). Measured
 //!   against Blender 5.0 on a cube whose normals all tilt 30 degrees: 0.995 of Cycles with it,
 //!   1.028 without it, 0.88 with Chiang, Li and Burley's earlier cubic (which older Cycles used).
+//! - The glossy side: where a bent normal would mirror the path below the surface, Cycles tilts
+//!   it back toward the geometric normal for its glossy lobes (Principled's specular and metal),
+//!   just enough that the mirror direction leaves the surface ([`valid_reflection`]); its diffuse
+//!   lobe keeps the bent normal. Without that, a cube at strength 2 read 6% darker than Cycles.
 //! - Photons: a density estimate counts the light a surface receives per unit of its geometric
 //!   area, by the geometric cosine; a bent normal's diffuse reflection takes it by the bent
 //!   cosine, so each photon is weighed by their ratio ([`ShadingFrame::photon_cosine_ratio`]).
@@ -63,6 +67,32 @@ impl NormalMap {
     }
 }
 
+/// The normal a glossy lobe takes at bent normal `n` (on the side of `wo`), seen from `wo` on a
+/// face of geometric normal `ng` (on the side of `wo`): `n` itself where `wo`'s mirror image about
+/// it leaves the face at least `min(0.9 cos, 0.01)` above it (`cos` the height `wo` arrives
+/// at), else the normal in the plane of `ng` and `n` that mirrors `wo` to just that height
+/// (Cycles' "ensure valid specular reflection", which Blender 5.0 applies with Bump Map
+/// Correction on, its default). The mirror image `r = 2 (n·wo) n - wo` at a normal
+/// `x X + z ng` (X along the face, `x^2 + z^2 = 1`) has height `threshold` where `z^2` solves a
+/// quadratic: the root on the side of `n`.
+pub fn valid_reflection(n: Vec3, ng: Vec3, wo: Vec3) -> Vec3 {
+    let height = wo.dot(ng);
+    let threshold = (0.9 * height).min(0.01);
+    if (2.0 * n.dot(wo) * n - wo).dot(ng) >= threshold {
+        return n;
+    }
+    let along = n - n.dot(ng) * ng;
+    let x_axis = along.try_normalize().unwrap_or(n);
+    let wo_x = wo.dot(x_axis);
+    let a = wo_x * wo_x + height * height;
+    let b = 2.0 * (a + height * threshold);
+    let c = (threshold + height) * (threshold + height);
+    let root = (b * b - 4.0 * a * c).max(0.0).sqrt();
+    let z2 = 0.25 * if wo_x < 0.0 { b + root } else { b - root } / a;
+    let (x, z) = ((1.0 - z2).max(0.0).sqrt(), z2.max(0.0).sqrt());
+    x * x_axis + z * ng
+}
+
 /// The factor on diffuse light arriving from `wi` at a surface whose smooth normal `smooth` a
 /// normal map bent to `bent`: 0 where `wi` is on the other side of the smooth surface than of the
 /// bent one (whichever way the two normals point), else GGX's masking at `wi`'s angle to the
@@ -87,6 +117,22 @@ pub fn shadowing(smooth: Vec3, bent: Vec3, wi: Vec3) -> f32 {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn a_valid_reflection_mirrors_the_path_just_above_the_surface_where_the_bent_normal_would_not() {
+        let wo = Vec3::new(-0.8, 0.0, 0.6);
+        // Mirrored above the surface: unchanged.
+        let gentle = Vec3::new(-0.2, 0.0, 1.0).normalize();
+        assert_eq!(valid_reflection(gentle, Vec3::Z, wo), gentle);
+        // Tilted away from wo so far that the mirror image goes below: tilted back to a normal
+        // whose mirror image leaves at the threshold height 0.01, in the plane of n and ng.
+        let steep = Vec3::new(0.9, 0.0, 0.3).normalize();
+        assert!((2.0 * steep.dot(wo) * steep - wo).z < 0.0);
+        let valid = valid_reflection(steep, Vec3::Z, wo);
+        let mirrored = 2.0 * valid.dot(wo) * valid - wo;
+        assert!((valid.length() - 1.0).abs() < 1e-5 && valid.y == 0.0 && valid.x > 0.0, "{valid}");
+        assert!((mirrored.z - 0.01).abs() < 1e-4, "{mirrored}");
+    }
 
     #[test]
     fn shadowing_leaves_an_unbent_normal_alone_and_darkens_grazing_light_on_a_bent_one() {

@@ -377,16 +377,20 @@ def normal_mapped():
 
 
 def normal_map_strengths():
-    """Three normal-mapped cubes: at strength 1 and 2 under Blender's default coat, and at
-    strength 0.5 without a coat (where Cycles' strength and glTF's scale differ)."""
+    """Five normal-mapped cubes: at strength 1 and 2 under Blender's default coat and without one,
+    and at strength 0.5 without a coat (where Cycles' strength and glTF's scale differ)."""
     clear()
     studio(principled("Floor", Base_Color=(0.5, 0.5, 0.5, 1.0)))
-    for i, (strength, coat) in enumerate(((1.0, 1.0), (2.0, 1.0), (0.5, 0.0))):
+    cubes = ((1.0, 1.0), (2.0, 1.0), (0.5, 0.0), (1.0, 0.0), (2.0, 0.0))
+    for i, (strength, coat) in enumerate(cubes):
         cube = add(bpy.ops.mesh.primitive_cube_add, bumpy(f"Strength {strength:g} coat {coat:g}", strength, coat),
-                   index=2 + i, size=1.2, location=(-1.8 + 1.8 * i, 0.3, 0.6))
+                   index=2 + i, size=0.9, location=(-2.4 + 1.2 * i, 0.3, 0.45))
         cube.rotation_euler = (0.0, 0.0, math.radians(30))
-    camera((0.0, -7.0, 3.5), (0.0, 0.3, 0.5))
-    return {"Floor": 1, "Strength 1 coated": 2, "Strength 2 coated": 3, "Strength 0.5": 4}
+    camera((0.0, -6.0, 3.0), (0.0, 0.3, 0.4), lens=35.0)
+    scene = bpy.context.scene
+    scene.render.resolution_x, scene.render.resolution_y = 128, 64
+    return {"Floor": 1, "Strength 1 coated": 2, "Strength 2 coated": 3, "Strength 0.5": 4, "Strength 1": 5,
+            "Strength 2": 6}
 
 
 def surface_of(name, kind, **inputs):
