@@ -8,7 +8,8 @@ add-on in a separate Blender (a bake cannot start inside a render), as
 OBJECTS.blend holds the objects (with their meshes and materials); JOBS.json lists
 `{"object", "material", "input", "out", "size"}`: for each, the input's node tree feeds an
 Emission shader that Cycles bakes (EMIT) over the object's active UV map into a `size` x `size`
-image, saved to `out` as a 16-bit PNG of linear values (Non-Color).
+image, saved to `out` as a 16-bit PNG of linear values (Non-Color). A Normal input (a Bump node,
+a procedural texture) is baked as Cycles shades it (NORMAL, in tangent space): a normal map.
 """
 import json
 import sys
@@ -34,12 +35,13 @@ def bake_one(scene, obj, material, job):
     """Bakes `job["input"]` of `material` on `obj` into `job["out"]`."""
     tree = material.node_tree
     nodes, links = tree.nodes, tree.links
-    principled = next(n for n in nodes if n.type == 'BSDF_PRINCIPLED')
-    output = next(n for n in nodes if n.type == 'OUTPUT_MATERIAL' and n.is_active_output)
-    source = principled.inputs[job["input"]].links[0].from_socket
-    emission = nodes.new("ShaderNodeEmission")
-    links.new(source, emission.inputs["Color"])
-    links.new(emission.outputs[0], output.inputs["Surface"])
+    if job["input"] != "Normal":
+        principled = next(n for n in nodes if n.type == 'BSDF_PRINCIPLED')
+        output = next(n for n in nodes if n.type == 'OUTPUT_MATERIAL' and n.is_active_output)
+        source = principled.inputs[job["input"]].links[0].from_socket
+        emission = nodes.new("ShaderNodeEmission")
+        links.new(source, emission.inputs["Color"])
+        links.new(emission.outputs[0], output.inputs["Surface"])
     size = job["size"]
     image = bpy.data.images.new("baked", size, size, float_buffer=True)
     image.colorspace_settings.name = 'Non-Color'
@@ -49,7 +51,10 @@ def bake_one(scene, obj, material, job):
     for other in scene.objects:
         other.select_set(other == obj)
     bpy.context.view_layer.objects.active = obj
-    bpy.ops.object.bake(type='EMIT', margin=4)
+    if job["input"] == "Normal":
+        bpy.ops.object.bake(type='NORMAL', normal_space='TANGENT', margin=4)
+    else:
+        bpy.ops.object.bake(type='EMIT', margin=4)
     image.filepath_raw, image.file_format = job["out"], 'PNG'
     settings = scene.render.image_settings
     settings.color_depth, settings.color_mode = '16', 'RGB'

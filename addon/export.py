@@ -1107,7 +1107,7 @@ def exporter_workarounds(scene):
 
 
 # The Principled inputs that are baked where nodes glTF cannot hold feed them.
-BAKED_INPUTS = ("Base Color", "Metallic", "Roughness", "Emission Color")
+BAKED_INPUTS = ("Base Color", "Metallic", "Roughness", "Emission Color", "Normal")
 
 
 def procedural_bakes(scene):
@@ -1151,19 +1151,24 @@ def bake_procedural_inputs(scene):
 
 
 def use_image(material, name, path):
-    """Feeds the Principled input `name` of `material` the image at `path` (linear values) in
-    place of what fed it; returns the step that puts the original link back."""
+    """Feeds the Principled input `name` of `material` the image at `path` (linear values; for the
+    Normal, a tangent-space normal map through a Normal Map node) in place of what fed it; returns
+    the step that puts the original link back."""
     tree = material.node_tree
     socket = principled_node(material).inputs[name]
     original = socket.links[0].from_socket
     image = bpy.data.images.load(path)
     image.colorspace_settings.name = 'Non-Color'
-    node = tree.nodes.new("ShaderNodeTexImage")
-    node.image = image
-    tree.links.new(node.outputs["Color"], socket)
+    added = [tree.nodes.new("ShaderNodeTexImage")]
+    added[0].image = image
+    if name == "Normal":
+        added.append(tree.nodes.new("ShaderNodeNormalMap"))
+        tree.links.new(added[0].outputs["Color"], added[1].inputs["Color"])
+    tree.links.new(added[-1].outputs[0], socket)
 
     def restore():
-        tree.nodes.remove(node)
+        for node in added:
+            tree.nodes.remove(node)
         tree.links.new(original, socket)
         bpy.data.images.remove(image)
     return restore

@@ -284,6 +284,9 @@ class Parity(unittest.TestCase):
     def test_baked_textures(self):
         self.check("baked_textures")
 
+    def test_baked_bump(self):
+        self.check("baked_bump")
+
 
 if __name__ == "__main__":
     enable_addon(BINARY)
