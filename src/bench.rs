@@ -6,10 +6,10 @@ use std::path::Path;
 use std::time::Instant;
 
 use crate::film::{Film, FilmMode};
-use crate::frames::{
+use crate::memory;
+use crate::render::{
     self, add_estimates, load_description, PhotonSampling, RenderReport, RenderSettings, Shot,
 };
-use crate::memory;
 use crate::sppm::{PassStats, Renderer};
 use rayon::prelude::*;
 
@@ -38,7 +38,7 @@ pub fn run_frames(
         settings.reuse = reuse;
         memory::reset_peak();
         let start = Instant::now();
-        let report: RenderReport = frames::render(&settings)?;
+        let report: RenderReport = render::render(&settings)?;
         let elapsed = start.elapsed().as_secs_f64();
         let own = report.frames.iter().map(|f| f.stats).sum::<PassStats>();
         let all = own + report.shared_stats;

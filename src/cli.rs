@@ -5,8 +5,8 @@ use std::path::{Path, PathBuf};
 use clap::{Args, Parser, Subcommand};
 
 use crate::error::Statistic;
-use crate::frames::{self, LightSampling, Method, PhotonSampling, ProgressStyle, RenderSettings};
 use crate::monitor::ErrorSettings;
+use crate::render::{self, LightSampling, Method, PhotonSampling, ProgressStyle, RenderSettings};
 
 /// The bundled demo scene, used when no scene is given.
 pub const DEMO_SCENE: &str = concat!(env!("CARGO_MANIFEST_DIR"), "/scenes/cornell_glass.gltf");
@@ -399,8 +399,8 @@ pub fn run(cli: Cli) -> Result<(), String> {
         Command::Render(args) => {
             let settings = args.settings();
             // Ctrl-C and SIGTERM end the render after its current pass, keeping every written frame.
-            ctrlc::set_handler(frames::request_stop).map_err(|e| format!("cannot watch for Ctrl-C: {e}"))?;
-            let report = thread_pool(args.threads)?.install(|| frames::render(&settings))?;
+            ctrlc::set_handler(render::request_stop).map_err(|e| format!("cannot watch for Ctrl-C: {e}"))?;
+            let report = thread_pool(args.threads)?.install(|| render::render(&settings))?;
             if settings.progress != ProgressStyle::Json {
                 if !report.skipped.is_empty() {
                     eprintln!("caustic: skipped {} frames already rendered (--resume)", report.skipped.len());
@@ -435,7 +435,7 @@ pub fn run(cli: Cli) -> Result<(), String> {
             Ok(())
         }
         Command::Merge(args) => {
-            for (path, frame) in frames::merge(&args.partials, &args.out, args.confidence)? {
+            for (path, frame) in render::merge(&args.partials, &args.out, args.confidence)? {
                 eprintln!("caustic: wrote {} ({} passes)", path.display(), frame.passes);
             }
             Ok(())

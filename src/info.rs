@@ -3,8 +3,8 @@
 
 use serde_json::{json, Value};
 
-use crate::frames::{is_animated, load_description, motion_spans, shutter, RenderSettings, Shot};
 use crate::materials::{Material, Volume};
+use crate::render::{is_animated, load_description, motion_spans, shutter, RenderSettings, Shot};
 use crate::scene::description::Description;
 use crate::spectrum::Wavelengths;
 use crate::sppm::{Renderer, AUTO_VISIBLE_BELOW};

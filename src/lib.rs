@@ -16,7 +16,7 @@
 //!                                                    v
 //!                 film::Film (sums over passes) -> error (bounds) -> monitor (log, stop)
 //!                                                    v
-//!        frames (drives frames and passes, writes frame_NNNN.exr) <- cli / info / bench
+//!        render (drives frames and passes, writes frame_NNNN.exr) <- cli / info / bench
 //!        plot (reads --log files), progress (bar or JSON lines), memory (peak heap)
 //! ```
 #![warn(missing_docs)]
@@ -27,7 +27,6 @@ pub mod camera;
 pub mod cli;
 pub mod error;
 pub mod film;
-pub mod frames;
 pub mod geometry;
 pub mod info;
 pub mod lights;
@@ -35,9 +34,9 @@ pub mod materials;
 pub mod memory;
 pub mod monitor;
 pub mod output;
-pub mod partial;
 pub mod plot;
 pub mod progress;
+pub mod render;
 pub mod sampling;
 pub mod scene;
 pub mod spectrum;

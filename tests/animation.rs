@@ -2,7 +2,7 @@
 
 mod common;
 
-use caustic::frames::{self, RenderReport, RenderSettings};
+use caustic::render::{self, RenderReport, RenderSettings};
 use caustic::scene::Scene;
 use common::*;
 use glam::Vec3;
@@ -22,7 +22,7 @@ fn emitter(gltf: &mut GltfBuilder, size: f32) -> usize {
 
 fn render_report(settings: &RenderSettings) -> RenderReport {
     let pool = rayon::ThreadPoolBuilder::new().num_threads(2).build().unwrap();
-    pool.install(|| frames::render(settings)).unwrap_or_else(|e| panic!("render failed: {e}"))
+    pool.install(|| render::render(settings)).unwrap_or_else(|e| panic!("render failed: {e}"))
 }
 
 /// Mean luminance of the rows `rows` at each column.

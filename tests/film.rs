@@ -4,7 +4,7 @@
 
 mod common;
 
-use caustic::frames::{self, RenderSettings};
+use caustic::render::{self, RenderSettings};
 use common::*;
 use serde_json::{json, Value};
 use std::path::Path;
@@ -31,7 +31,7 @@ fn ground_and_sphere(
     extras.as_object_mut().unwrap().extend(scene_extras.as_object().cloned().unwrap_or_default());
     gltf.scene_extras(extras);
     let path = gltf.write(dir, "ground");
-    let report = frames::render(&settings(&path, dir, 16)).unwrap();
+    let report = render::render(&settings(&path, dir, 16)).unwrap();
     let channels = exr_channels(&report.frames[0].path);
     let alpha = channels.into_iter().find(|(name, _)| name == "Combined.A").expect("an alpha channel").1;
     (read_exr(&report.frames[0].path), alpha)
@@ -119,7 +119,7 @@ fn a_crop_is_the_same_pixels_as_the_whole_image() {
         }
     }
     let beyond = RenderSettings { crop: Some([40, 0, 10, 10]), ..whole_settings };
-    let message = frames::render(&beyond).err().expect("a crop beyond the image is refused");
+    let message = render::render(&beyond).err().expect("a crop beyond the image is refused");
     assert!(message.contains("--crop 40,0,10,10 reaches beyond the 48x36 image"), "{message}");
 }
 
@@ -136,10 +136,10 @@ fn denoising_passes_hold_the_albedo_and_normal_the_camera_sees() {
     gltf.camera([0.0, 1.0, 3.0], [0.0, -1.0, -1.0], 0.6);
     gltf.scene_extras(json!({"resolution": [16, 16], "world": {"color": [1.0, 1.0, 1.0]}}));
     let path = gltf.write(dir.path(), "ground");
-    let plain = frames::render(&settings(&path, &dir.path().join("plain"), 64)).unwrap();
+    let plain = render::render(&settings(&path, &dir.path().join("plain"), 64)).unwrap();
     let guided_settings =
         RenderSettings { denoising_passes: true, ..settings(&path, &dir.path().join("guided"), 64) };
-    let guided = frames::render(&guided_settings).unwrap();
+    let guided = render::render(&guided_settings).unwrap();
     let (plain, guided_image) = (read_exr(&plain.frames[0].path), read_exr(&guided.frames[0].path));
     assert_eq!(plain.rgb, guided_image.rgb, "the guides change nothing in the image");
     let channels = exr_channels(&guided.frames[0].path);

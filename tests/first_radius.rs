@@ -7,7 +7,7 @@ mod common;
 
 use std::sync::Arc;
 
-use caustic::frames::{load_description, RenderSettings, Shot};
+use caustic::render::{load_description, RenderSettings, Shot};
 use common::*;
 use serde_json::{json, Value};
 

@@ -10,7 +10,7 @@
 
 mod common;
 
-use caustic::frames::{self, Method, RenderSettings};
+use caustic::render::{self, Method, RenderSettings};
 use caustic::scene::Description;
 use proptest::prelude::*;
 use rand::{Rng, RngExt, SeedableRng};
@@ -46,9 +46,9 @@ fn load_and_render(path: &Path) -> Result<(), String> {
         s.passes = Some(1);
         s.resolution = Some([4, 4]);
         s.photons = Some(16);
-        let _ = frames::render(&s);
+        let _ = render::render(&s);
         s.method = Method::Vcm;
-        let _ = frames::render(&s);
+        let _ = render::render(&s);
     });
     outcome.map_err(|panic| {
         let message = panic

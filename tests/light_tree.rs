@@ -4,7 +4,7 @@
 
 mod common;
 
-use caustic::frames::LightSampling;
+use caustic::render::LightSampling;
 use common::*;
 
 /// `scene` at 64x48 with `passes` passes, its lights chosen by `sampling`.

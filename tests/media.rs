@@ -6,7 +6,7 @@
 
 mod common;
 
-use caustic::frames::{self, RenderSettings};
+use caustic::render::{self, RenderSettings};
 use common::*;
 use serde_json::{json, Value};
 use std::f64::consts::PI;
@@ -205,10 +205,10 @@ fn media_render_the_same_bits_on_any_threads_and_merge_exactly() {
             partial_passes: Some(passes),
             ..s.clone()
         };
-        frames::render(&partial).unwrap();
+        render::render(&partial).unwrap();
     }
     let files: Vec<PathBuf> = std::fs::read_dir(&parts).unwrap().map(|e| e.unwrap().path()).collect();
-    let merged = frames::merge(&files, &dir.path().join("merged"), 0.9).unwrap();
+    let merged = render::merge(&files, &dir.path().join("merged"), 0.9).unwrap();
     let merged = read_exr(&merged[0].0);
     for (a, b) in merged.rgb.iter().flatten().zip(two.rgb.iter().flatten()) {
         assert!((a - b).abs() <= 1e-6 * b.abs().max(1e-30), "merged {a} against whole {b}");

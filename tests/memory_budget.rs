@@ -6,7 +6,7 @@
 
 mod common;
 
-use caustic::frames::{self, RenderSettings};
+use caustic::render::{self, RenderSettings};
 use caustic::memory::{self, CountingAllocator};
 use common::*;
 
@@ -16,7 +16,7 @@ static ALLOCATOR: CountingAllocator = CountingAllocator;
 /// The heap's peak while `settings` render, in MiB, and the longest block.
 fn peak_while_rendering(settings: &RenderSettings) -> (f64, usize) {
     memory::reset_peak();
-    let report = frames::render(settings).unwrap_or_else(|e| panic!("render failed: {e}"));
+    let report = render::render(settings).unwrap_or_else(|e| panic!("render failed: {e}"));
     (memory::peak_mib().expect("the counting allocator is installed"), report.block_frames)
 }
 

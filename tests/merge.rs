@@ -3,13 +3,13 @@
 
 mod common;
 
-use caustic::frames::{self, Method, RenderSettings};
+use caustic::render::{self, Method, RenderSettings};
 use common::*;
 use std::path::{Path, PathBuf};
 
 fn render_frames(settings: &RenderSettings) {
     let pool = rayon::ThreadPoolBuilder::new().num_threads(2).build().unwrap();
-    pool.install(|| frames::render(settings)).unwrap_or_else(|e| panic!("render failed: {e}"));
+    pool.install(|| render::render(settings)).unwrap_or_else(|e| panic!("render failed: {e}"));
 }
 
 /// Frames 1 and 2 of the shot at 48x36, 2000 photons a pass, into `out`.
@@ -30,7 +30,7 @@ fn partial(base: &RenderSettings, out: &Path, passes: std::ops::Range<u64>) -> P
         ..base.clone()
     };
     render_frames(&s);
-    caustic::partial::partial_path(out, 1, &passes)
+    caustic::render::partial::partial_path(out, 1, &passes)
 }
 
 /// Passes 0..3 and 3..8 merged give the 8-pass render's Combined, Error and Variance channels
@@ -55,7 +55,7 @@ fn assert_merged_pass_ranges_equal_the_whole_run(method: Method) {
     partial(&whole, &parts, 0..3);
     let files: Vec<PathBuf> = std::fs::read_dir(&parts).unwrap().map(|e| e.unwrap().path()).collect();
     assert_eq!(files.len(), 4, "two frames, two ranges: {files:?}");
-    let merged = frames::merge(&files, &dir.path().join("merged"), 0.9).unwrap();
+    let merged = render::merge(&files, &dir.path().join("merged"), 0.9).unwrap();
     assert_eq!(merged.len(), 2);
     for (path, film) in merged {
         assert_eq!(film.passes, 8);
@@ -72,7 +72,7 @@ fn assert_merged_pass_ranges_equal_the_whole_run(method: Method) {
 
 fn merge_error(files: &[PathBuf]) -> String {
     let out = tempfile::tempdir().unwrap();
-    match frames::merge(files, out.path(), 0.9) {
+    match render::merge(files, out.path(), 0.9) {
         Ok(_) => panic!("merged {files:?}"),
         Err(message) => message,
     }
@@ -97,7 +97,7 @@ fn merges_that_do_not_add_up_are_refused() {
     let other_scene_settings =
         RenderSettings { scene: bundled_scene("shot_moving_camera.gltf"), ..base.clone() };
     let other_scene = partial(&other_scene_settings, &dir.path().join("f"), 4..8);
-    let frame_two = caustic::partial::partial_path(&dir.path().join("b"), 2, &(4..8));
+    let frame_two = caustic::render::partial::partial_path(&dir.path().join("b"), 2, &(4..8));
     let other_method =
         partial(&RenderSettings { method: Method::Vcm, ..base.clone() }, &dir.path().join("g"), 4..8);
 

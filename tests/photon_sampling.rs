@@ -4,7 +4,7 @@
 
 mod common;
 
-use caustic::frames::PhotonSampling;
+use caustic::render::PhotonSampling;
 use common::*;
 
 /// `scene` at 64x48 with `passes` passes of `photons` photon paths, drawn by `sampling`.
@@ -63,14 +63,14 @@ fn visible_photons_give_the_same_bits_with_any_thread_count() {
 /// by the passes rendered before).
 #[test]
 fn visible_photons_merge_pass_ranges_exactly() {
-    use caustic::frames::{self, RenderSettings};
+    use caustic::render::{self, RenderSettings};
     let dir = tempfile::tempdir().unwrap();
     let pool = rayon::ThreadPoolBuilder::new().num_threads(2).build().unwrap();
     let mut whole = settings(&bundled_scene("sunlit_room.gltf"), &dir.path().join("whole"), 5);
     whole.resolution = Some([64, 48]);
     whole.photons = Some(20_000);
     whole.photon_sampling = PhotonSampling::Visible;
-    pool.install(|| frames::render(&whole)).unwrap();
+    pool.install(|| render::render(&whole)).unwrap();
     let parts = dir.path().join("parts");
     let files: Vec<_> = [0..2, 2..5]
         .into_iter()
@@ -81,11 +81,11 @@ fn visible_photons_merge_pass_ranges_exactly() {
                 partial_passes: Some(passes.clone()),
                 ..whole.clone()
             };
-            pool.install(|| frames::render(&s)).unwrap();
-            caustic::partial::partial_path(&parts, 1, &passes)
+            pool.install(|| render::render(&s)).unwrap();
+            caustic::render::partial::partial_path(&parts, 1, &passes)
         })
         .collect();
-    let merged = frames::merge(&files, &dir.path().join("merged"), 0.9).unwrap();
+    let merged = render::merge(&files, &dir.path().join("merged"), 0.9).unwrap();
     let (path, _) = &merged[0];
     let (a, b) =
         (exr_channels(path), exr_channels(&dir.path().join("whole").join(path.file_name().unwrap())));

@@ -8,7 +8,7 @@
 
 mod common;
 
-use caustic::frames::{self, RenderReport, RenderSettings};
+use caustic::render::{self, RenderReport, RenderSettings};
 use caustic::scene::Scene;
 use common::*;
 use glam::{Vec2, Vec3};
@@ -17,11 +17,11 @@ use std::path::{Path, PathBuf};
 
 fn render_frames(settings: &RenderSettings, threads: usize) -> RenderReport {
     let pool = rayon::ThreadPoolBuilder::new().num_threads(threads).build().unwrap();
-    pool.install(|| frames::render(settings)).unwrap_or_else(|e| panic!("render failed: {e}"))
+    pool.install(|| render::render(settings)).unwrap_or_else(|e| panic!("render failed: {e}"))
 }
 
 fn frame_image(settings: &RenderSettings, frame: i32) -> Image {
-    read_exr(&frames::frame_path(&settings.out_dir, frame))
+    read_exr(&render::frame_path(&settings.out_dir, frame))
 }
 
 /// Asserts that every channel of every pixel of `a` is within `1e-4 |b| + 1e-6` of `b`.
@@ -208,7 +208,7 @@ fn an_object_moving_mid_range_is_static_before_and_after() {
     let info = caustic::info::report(&s).unwrap();
     assert_eq!(info["spans"], json!([[1, 2, 3, 4], [5, 6, 7], [8, 9, 10]]), "caustic info names the spans");
     assert_eq!(report.poses, 3, "only the frames where the ball rolls are posed");
-    let still = |f: i32| read_exr(&frames::frame_path(&s.out_dir, f)).rgb;
+    let still = |f: i32| read_exr(&render::frame_path(&s.out_dir, f)).rgb;
     assert!(still(1) == still(4) && still(8) == still(10), "frames where nothing moves are alike");
     assert!(still(1) != still(8), "the ball has moved");
 }

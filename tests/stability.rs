@@ -9,7 +9,7 @@
 
 mod common;
 
-use caustic::frames::{self, RenderSettings};
+use caustic::render::{self, RenderSettings};
 use common::*;
 use serde_json::{json, Value};
 use std::f32::consts::PI;
@@ -38,7 +38,7 @@ fn holds(what: &str, measured: String, pass: bool) -> Outcome {
 /// Renders and checks that every channel of every frame's EXR is finite.
 fn render_checked(s: &RenderSettings) -> Result<Image, String> {
     let pool = rayon::ThreadPoolBuilder::new().num_threads(2).build().unwrap();
-    let report = pool.install(|| frames::render(s))?;
+    let report = pool.install(|| render::render(s))?;
     for frame in &report.frames {
         for (name, values) in exr_channels(&frame.path) {
             if let Some(bad) = values.iter().find(|v| !v.is_finite()) {
@@ -155,7 +155,7 @@ fn refused(
     let mut s = quick(path, out);
     tweak(&mut s);
     let pool = rayon::ThreadPoolBuilder::new().num_threads(2).build().unwrap();
-    Ok(match pool.install(|| frames::render(&s)) {
+    Ok(match pool.install(|| render::render(&s)) {
         Ok(_) => holds(&format!("refused: {}", expected.join(", ")), "rendered".into(), false),
         Err(message) => {
             let pass = expected.iter().all(|e| message.contains(e));

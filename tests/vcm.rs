@@ -4,7 +4,7 @@
 
 mod common;
 
-use caustic::frames::Method;
+use caustic::render::Method;
 use common::*;
 use serde_json::json;
 use std::f32::consts::PI;

@@ -4,7 +4,7 @@
 
 mod common;
 
-use caustic::frames::Method;
+use caustic::render::Method;
 use caustic::spectrum::{cmf, d65, xyz_to_linear_rec709, RgbSpectrum};
 use common::*;
 use glam::Vec3;

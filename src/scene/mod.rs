@@ -53,7 +53,7 @@ pub struct SceneError {
 }
 
 /// The default first gather radius, as a fraction of the radius of the sphere around the scene
-/// (smaller with more photons than pixels: `frames::default_radius`).
+/// (smaller with more photons than pixels: `render::default_radius`).
 pub const DEFAULT_RADIUS_FRACTION: f64 = 0.04;
 
 /// One triangle: indices into the vertex arrays and its material.

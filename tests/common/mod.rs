@@ -6,7 +6,7 @@ use std::path::{Path, PathBuf};
 use std::process::{Command, Output};
 
 use base64::Engine;
-use caustic::frames::{self, RenderSettings};
+use caustic::render::{self, RenderSettings};
 use serde_json::{json, Value};
 
 /// The repository's bundled scene `name`.
@@ -66,7 +66,7 @@ impl Image {
 /// Renders with the library on a pool of `threads` workers and returns the image.
 pub fn render(settings: &RenderSettings, threads: usize) -> Image {
     let pool = rayon::ThreadPoolBuilder::new().num_threads(threads).build().unwrap();
-    let report = pool.install(|| frames::render(settings)).unwrap_or_else(|e| panic!("render failed: {e}"));
+    let report = pool.install(|| render::render(settings)).unwrap_or_else(|e| panic!("render failed: {e}"));
     read_exr(&report.frames[0].path)
 }
 
