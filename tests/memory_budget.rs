@@ -6,8 +6,8 @@
 
 mod common;
 
-use caustic::render::{self, RenderSettings};
 use caustic::memory::{self, CountingAllocator};
+use caustic::render::{self, RenderSettings};
 use common::*;
 
 #[global_allocator]

@@ -1,7 +1,7 @@
 //! The render-ready scene at one time: world-space triangles, materials, lights and the camera.
 //!
 //! Takes a glTF 2.0 file (`.gltf` with its `.bin`, or `.glb`) plus the `caustic` extras
-//! ([`extras`]); [`gltf_loader`] reads it into a time-independent [`Description`]; [`pose`]
+//! ([`extras`]); [`gltf`] reads it into a time-independent [`Description`]; [`pose`]
 //! splits it, for a range of times, into a fixed part (flattened and indexed once) and the moving
 //! instances, and poses a [`Scene`] at any time in the range. The accelerator and the SPPM passes
 //! read a `Scene` and never change it. Emitting triangles are also lights.
@@ -12,11 +12,7 @@ pub mod deform;
 pub mod description;
 mod edges;
 pub mod extras;
-mod gltf_checks;
-mod gltf_loader;
-mod gltf_materials;
-mod gltf_textures;
-mod gltf_unrendered;
+mod gltf;
 mod instancing;
 pub mod pointers;
 pub mod pose;
@@ -299,7 +295,7 @@ pub fn bounding_sphere(boxes: impl Iterator<Item = (Vec3, Vec3)>) -> BoundingSph
 impl Description {
     /// Reads a glTF 2.0 file.
     pub fn load(path: &Path) -> Result<Description, SceneError> {
-        gltf_loader::load(path)
+        gltf::load(path)
     }
 
     /// Whether some medium scatters light: a material's inside, or the world's fog.

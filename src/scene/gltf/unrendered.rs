@@ -4,7 +4,7 @@
 //!
 //! Occlusion textures are not light transport and are ignored without a warning.
 
-use super::gltf_textures::{info_set, normal_set, raw_info_set};
+use super::textures::{info_set, normal_set, raw_info_set};
 use crate::materials::Material;
 use crate::texture::UV_SETS;
 

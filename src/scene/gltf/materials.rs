@@ -6,8 +6,8 @@ use std::sync::Arc;
 
 use glam::Vec3;
 
-use super::extras::{self, MaterialExtras, MediumExtras};
-use super::gltf_textures::{info_map, normal_map, raw_info, Images};
+use super::textures::{info_map, normal_map, raw_info, Images};
+use crate::scene::extras::{self, MaterialExtras, MediumExtras};
 use gltf::material::AlphaMode;
 
 use crate::materials::{
@@ -210,7 +210,7 @@ fn sheen(m: &gltf::Material, document: &gltf::Document, images: &Images) -> Resu
 /// by name), or `None` where nothing is absorbed: without the
 /// extension, without an attenuation distance (glTF's default: infinite), with a white colour,
 /// or with a thickness factor of 0, which glTF reads as a thin wall without a volume (warned of
-/// by `gltf_unrendered`).
+/// by `unrendered`).
 fn volume(m: &gltf::Material) -> Result<Option<Volume>, String> {
     const EXTENSION: &str = "KHR_materials_volume";
     let Some(value) = m.extension_value(EXTENSION) else {
