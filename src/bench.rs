@@ -10,7 +10,7 @@ use crate::memory;
 use crate::render::{
     self, add_estimates, load_description, PhotonSampling, RenderReport, RenderSettings, Shot,
 };
-use crate::sppm::{PassStats, Renderer};
+use crate::transport::{PassStats, Renderer};
 use rayon::prelude::*;
 
 /// Rays of every kind in `stats`.

@@ -7,7 +7,7 @@ use crate::materials::{Material, Volume};
 use crate::render::{is_animated, load_description, motion_spans, shutter, RenderSettings, Shot};
 use crate::scene::description::Description;
 use crate::spectrum::Wavelengths;
-use crate::sppm::{Renderer, AUTO_VISIBLE_BELOW};
+use crate::transport::{Renderer, AUTO_VISIBLE_BELOW};
 
 /// The lights (by node), materials and camera whose values are animated, with what is animated.
 fn animated_values(description: &Description) -> Value {

@@ -9,10 +9,11 @@
 //!        spectrum, sampling, geometry, texture, Scene --accel--> BVHs (fixed + moving)
 //!        materials, lights, camera (leaves)          |
 //!                                                    v
-//!                 sppm::Renderer::run_pass(i) -> per-pixel estimates at lambda_i, time_i
-//!                                 (SPPM's gather, or sppm::vcm's connections and merging)
-//!                 sppm::run_shared_pass(i) -> the same for a block of frames, sharing the
-//!                                             paths on static triangles (DSPPM)
+//!            transport::Renderer::run_pass(i) -> per-pixel estimates at lambda_i, time_i
+//!                     (transport::sppm's gather, or transport::vcm's connections and merging,
+//!                      over what both share: eye-path start, emission, kernel, grid, media)
+//!            transport::run_shared_pass(i) -> the same for a block of frames, sharing the
+//!                                             paths on static triangles (reuse, DSPPM)
 //!                                                    v
 //!                 film::Film (sums over passes) -> error (bounds) -> monitor (log, stop)
 //!                                                    v
@@ -40,5 +41,5 @@ pub mod render;
 pub mod sampling;
 pub mod scene;
 pub mod spectrum;
-pub mod sppm;
 pub mod texture;
+pub mod transport;

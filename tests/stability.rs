@@ -325,7 +325,7 @@ const CASES: &[Case] = &[
         Ok(holds("finite, peak > 20 x mean", format!("peak {peak:.1}, mean {mean:.3}"), peak > 20.0 * mean))
     }),
     ("progressive: 1e7 passes of the radius sequence", |_| {
-        let r2 = |i: u64| caustic::sppm::radius::radius_squared(1.0, 2.0 / 3.0, i);
+        let r2 = |i: u64| caustic::transport::radius::radius_squared(1.0, 2.0 / 3.0, i);
         let (a, b) = (r2(10_000_000), r2(10_000_001));
         Ok(holds(
             "0 < r2(1e7 + 1) < r2(1e7), ~ 1e7^(-1/3)",

@@ -15,9 +15,9 @@ use crate::monitor::Monitor;
 use crate::progress::Progress;
 use crate::progress::ProgressStyle;
 use crate::scene::Scene;
-use crate::sppm::Method;
+use crate::transport::Method;
 
-use crate::sppm::{run_shared_pass, FrameEstimates, PassSamples, PassStats, PixelEstimate, Renderer};
+use crate::transport::{run_shared_pass, FrameEstimates, PassSamples, PassStats, PixelEstimate, Renderer};
 
 impl Shot {
     /// Whether a block of `frames` frames shares paths: reuse is on, there is more than one

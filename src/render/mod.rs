@@ -13,7 +13,7 @@ mod settings;
 mod shot;
 
 pub use crate::progress::ProgressStyle;
-pub use crate::sppm::{LightSampling, Method, PhotonSampling};
+pub use crate::transport::{LightSampling, Method, PhotonSampling};
 pub use blocks::add_estimates;
 pub use merge::merge;
 pub use report::{write_frame, FrameReport, RenderReport, TimeSplit};

@@ -13,7 +13,7 @@ use crate::monitor::StopReason;
 use crate::progress::Progress;
 use rayon::prelude::*;
 
-use crate::sppm::PassStats;
+use crate::transport::PassStats;
 
 /// What a finished frame reports.
 #[derive(Clone, Debug)]

@@ -13,7 +13,7 @@ use crate::scene::pose::Motion;
 use crate::scene::{Description, Prepared, Scene, TimeRange, DEFAULT_RADIUS_FRACTION};
 
 use crate::progress::ProgressStyle;
-use crate::sppm::{Crop, LightSampling, Method, PhotonSampling, SppmSettings, ViewMeasure};
+use crate::transport::{Crop, LightSampling, Method, PhotonSampling, SppmSettings, ViewMeasure};
 
 /// Everything `caustic render` was asked for.
 #[derive(Clone, Debug)]

@@ -15,9 +15,9 @@ use crate::sampling::pass_time_sample;
 use crate::scene::description::{Lens, Shutter};
 use crate::scene::pose::{lens, Motion};
 use crate::scene::{Description, Prepared, Scene, TimeRange};
-use crate::sppm::{Method, PhotonSampling};
+use crate::transport::{Method, PhotonSampling};
 
-use crate::sppm::{vcm_unsupported, Renderer, SppmSettings, ViewMeasure};
+use crate::transport::{vcm_unsupported, Renderer, SppmSettings, ViewMeasure};
 
 /// A render of one scene over its frames: the prepared time range and what every frame shares.
 pub struct Shot {

@@ -7,8 +7,9 @@ use std::time::Instant;
 use super::beams::{add_beams, in_media, Beam};
 use super::gather::{gather, PhotonSet};
 use super::photon_sampling::visible_points;
-use super::renderer::{collect_counting, Method, PassSamples, PassStats, PixelEstimate, Renderer};
-use super::visible::{continue_eye_path, start_eye_path, trace_eye_path, EyeEvent, EyeResult};
+use super::visible::{continue_eye_path, trace_eye_path, EyeEvent, EyeResult};
+use crate::transport::context::{collect_counting, Method, PassSamples, PassStats, PixelEstimate, Renderer};
+use crate::transport::eye::start_eye_path;
 
 /// Pixels an eye pass with beams traces as one task.
 const BEAM_CHUNK: usize = 256;
@@ -93,7 +94,7 @@ impl<'a> Renderer<'a> {
         all
     }
 
-    pub(super) fn trace_visible_points(&self, pass: &PassSamples) -> (Vec<EyeResult>, PassStats) {
+    pub(crate) fn trace_visible_points(&self, pass: &PassSamples) -> (Vec<EyeResult>, PassStats) {
         let pixels = (self.settings.width * self.settings.height) as usize;
         collect_counting(pixels, |pixel| trace_eye_path(self, pass, pixel))
     }

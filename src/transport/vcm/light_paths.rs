@@ -12,9 +12,9 @@ use crate::lights::SoftFalloff;
 use crate::materials::{Bsdf, Lobe, Transport};
 use crate::sampling::Sampler;
 use crate::spectrum::{hero_only, SampledSpectrum, LANES};
-use crate::sppm::media::Media;
-use crate::sppm::photons::photon_stream;
-use crate::sppm::renderer::{PassSamples, PassStats, Renderer, MAX_DEPTH};
+use crate::transport::context::{PassSamples, PassStats, Renderer, MAX_DEPTH};
+use crate::transport::emission::photon_stream;
+use crate::transport::media::Media;
 
 /// A vertex of a light subpath where its BSDF is not a delta.
 #[derive(Clone, Copy, Debug)]

@@ -12,8 +12,8 @@
 
 use glam::Vec3;
 
+use super::context::Renderer;
 use super::free_flight::equiangular;
-use super::renderer::Renderer;
 use super::see_through;
 use crate::materials::{Bsdf, ShadingFrame, Volume};
 use crate::spectrum::{SampledSpectrum, Wavelengths};

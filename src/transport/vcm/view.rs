@@ -11,7 +11,7 @@
 use glam::{Vec2, Vec3};
 
 use crate::camera::{Camera, Projection};
-use crate::sppm::renderer::Crop;
+use crate::transport::context::Crop;
 
 /// The camera of a pass.
 #[derive(Clone, Copy, Debug)]

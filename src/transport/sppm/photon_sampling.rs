@@ -21,11 +21,12 @@
 
 use rayon::prelude::*;
 
-use super::photons::{continue_photon, emit_photon, photon_stream, trace_photon, Photon};
+use super::photons::{continue_photon, trace_photon, Photon};
 use super::points::PointGrid;
-use super::renderer::{Crop, PassSamples, PassStats, PhotonSampling, Renderer, SppmSettings};
 use super::visible::EyeResult;
 use crate::sampling::{stream, wrap_unit, Sampler, Stream, Uniforms};
+use crate::transport::context::{Crop, PassSamples, PassStats, PhotonSampling, Renderer, SppmSettings};
+use crate::transport::emission::{emit_photon, photon_stream};
 
 /// The share of a pass's photon paths traced uniformly first, as the pilot.
 const PILOT_SHARE: usize = 16;
@@ -49,7 +50,7 @@ const SMALLEST_MOVE: f32 = 1.0 / 1024.0;
 
 impl Renderer<'_> {
     /// The photons of `pass`, whose visible points are `points` (those the eye pass found).
-    pub(super) fn trace_photons(
+    pub(crate) fn trace_photons(
         &self,
         pass: &PassSamples,
         points: impl Iterator<Item = (usize, glam::Vec3)>,
@@ -97,7 +98,7 @@ impl Renderer<'_> {
     /// Where photon paths are drawn by visibility and the film is a window of the image: the
     /// whole image's eye pass, whose visible points decide which paths are seen (so that a
     /// render region holds exactly the whole render's pixels). `None` otherwise.
-    pub(super) fn whole_image_points(&self, pass: &PassSamples) -> Option<Vec<EyeResult>> {
+    pub(crate) fn whole_image_points(&self, pass: &PassSamples) -> Option<Vec<EyeResult>> {
         let crop = self.settings.crop;
         if self.settings.photon_sampling == PhotonSampling::Uniform || crop == Crop::whole(crop.image) {
             return None;
@@ -119,7 +120,7 @@ fn trace_uniform(
     pass: &PassSamples,
     range: std::ops::Range<usize>,
 ) -> (Vec<Photon>, PassStats) {
-    let chunks: Vec<(Vec<Photon>, PassStats)> = super::photons::photon_chunks(range)
+    let chunks: Vec<(Vec<Photon>, PassStats)> = crate::transport::emission::photon_chunks(range)
         .map(|paths| {
             let mut photons = Vec::with_capacity(paths.end as usize - paths.start as usize);
             let stats = paths.map(|k| trace_photon(renderer, pass, k, &mut photons)).sum();
@@ -138,8 +139,8 @@ fn concatenate(chunks: Vec<(Vec<Photon>, PassStats)>) -> (Vec<Photon>, PassStats
 }
 
 /// The pilot: a pass's first uniform paths, their photons, and which of them are seen.
-pub(super) struct Pilot {
-    pub(super) photons: Vec<Photon>,
+pub(crate) struct Pilot {
+    pub(crate) photons: Vec<Photon>,
     /// The indices of the paths seen, in order.
     seen_paths: Vec<u64>,
     /// How many paths the pilot traced.
@@ -165,7 +166,7 @@ impl Pilot {
 
     /// The fraction of the paths that count toward the normalisation (its first round's) that
     /// a visible point sees.
-    pub(super) fn seen_fraction(&self) -> f64 {
+    pub(crate) fn seen_fraction(&self) -> f64 {
         self.counted_seen as f64 / self.counted_paths as f64
     }
 
@@ -180,14 +181,14 @@ impl Pilot {
 }
 
 /// The uniform paths `paths` of `pass` as a pilot.
-pub(super) fn trace_pilot(
+pub(crate) fn trace_pilot(
     renderer: &Renderer,
     pass: &PassSamples,
     paths: std::ops::Range<usize>,
     seen: &PointGrid,
 ) -> Pilot {
     let count = (paths.end - paths.start) as u64;
-    let chunks: Vec<Pilot> = super::photons::photon_chunks(paths)
+    let chunks: Vec<Pilot> = crate::transport::emission::photon_chunks(paths)
         .map(|range| {
             let mut pilot = Pilot::empty();
             for k in range {

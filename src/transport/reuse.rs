@@ -31,16 +31,16 @@ use std::sync::Arc;
 use glam::Vec3;
 use rayon::prelude::*;
 
-use super::direct::ShadowRay;
-use super::gather::{sum_over, FirstRound, PhotonSet, PhotonSums};
-use super::photons::{continue_photon, photon_chunks, start_photon, trace_photon, Photon, PhotonState};
-use super::points::{PixelMarks, PointGrid};
-use super::renderer::{collect_counting, PassSamples, PassStats, PixelEstimate, Renderer};
-use super::visible::{
-    continue_eye_path, start_eye_path, trace_eye_path, with_direct, EyeEnd, EyeEvent, EyeResult, EyeState,
-};
+use super::context::{collect_counting, PassSamples, PassStats, PixelEstimate, Renderer};
+use super::sppm::direct::ShadowRay;
+use super::sppm::gather::{sum_over, FirstRound, PhotonSet, PhotonSums};
+use super::sppm::photons::{continue_photon, trace_photon, Photon};
+use super::sppm::points::{PixelMarks, PointGrid};
+use super::sppm::visible::{continue_eye_path, trace_eye_path, with_direct, EyeEnd, EyeEvent, EyeResult};
 use crate::geometry::ray_meets_box;
 use crate::spectrum::SampledSpectrum;
+use crate::transport::emission::{photon_chunks, start_photon, PhotonState};
+use crate::transport::eye::{start_eye_path, EyeState};
 
 /// The box every frame's moving triangles lie in this pass, grown a little for rounding.
 #[derive(Clone, Copy)]

@@ -30,11 +30,11 @@ use rayon::prelude::*;
 use std::f32::consts::PI;
 
 use super::photons::Photon;
-use super::renderer::PixelEstimate;
-use super::visible::EyeState;
 use crate::materials::{phase, transmittance, Volume};
 use crate::scene::Scene;
 use crate::spectrum::{SampledSpectrum, Wavelengths, LANES};
+use crate::transport::context::PixelEstimate;
+use crate::transport::eye::EyeState;
 
 /// An eye path's segment through a medium that scatters.
 #[derive(Clone, Copy, Debug)]

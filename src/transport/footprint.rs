@@ -17,9 +17,9 @@
 //! points of the film's size there ([`crate::camera::Camera::film_size_at`]); the density is the
 //! count of photons of pass 0's first uniform paths within `PROBE_RADIUS` of those points.
 
-use super::photon_sampling::{trace_pilot, AUTO_VISIBLE_BELOW};
-use super::points::PointGrid;
-use super::renderer::{Crop, PhotonSampling, Renderer, SppmSettings};
+use super::context::{Crop, PhotonSampling, Renderer, SppmSettings};
+use super::sppm::photon_sampling::{trace_pilot, AUTO_VISIBLE_BELOW};
+use super::sppm::points::PointGrid;
 
 /// Pixels of the probe film (the image's aspect ratio, at most the image's pixels).
 const PROBE_PIXELS: f64 = 16_384.0;

@@ -14,9 +14,10 @@ use super::mis::{merging, LightPartials, MergeVertex, Partials, PassWeights};
 use crate::materials::{Bsdf, ShadingFrame};
 use crate::scene::OpenEdges;
 use crate::spectrum::SampledSpectrum;
-use crate::sppm::gather::{bucketed, kernel_mass_within, Kernel, Positions, Wall, EDGE_COSINE};
-use crate::sppm::grid::PhotonGrid;
-use crate::sppm::media::Media;
+use crate::transport::grid::PhotonGrid;
+use crate::transport::grid::{bucketed, Positions};
+use crate::transport::kernel::{kernel_mass_within, Kernel, Wall, EDGE_COSINE};
+use crate::transport::media::Media;
 
 /// What merging reads of a light vertex within reach, besides its position.
 #[derive(Clone, Copy, Debug)]

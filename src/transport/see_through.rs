@@ -7,7 +7,7 @@
 
 use glam::Vec3;
 
-use super::renderer::Renderer;
+use super::context::Renderer;
 use crate::accel::Hit;
 use crate::geometry::offset_origin;
 use crate::spectrum::Wavelengths;

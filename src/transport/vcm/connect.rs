@@ -10,7 +10,7 @@ use super::mis::{connection, DirectWeight, End, PassWeights};
 use super::{finite, kept, visibility};
 use crate::sampling::PixelSampler;
 use crate::spectrum::SampledSpectrum;
-use crate::sppm::renderer::{PassSamples, PassStats, Renderer};
+use crate::transport::context::{PassSamples, PassStats, Renderer};
 
 /// Whether light arriving at `camera` from `wi` can leave toward its way back.
 fn reaches(camera: &CameraVertex, wi: Vec3) -> bool {

@@ -13,104 +13,19 @@
 //! across such a surface's plane from a point behind it (a thin partition's far side) are left
 //! out ([`Weigher`]).
 
-use glam::{Vec3, Vec4};
+use glam::Vec3;
 use rayon::prelude::*;
-use std::f32::consts::{FRAC_1_PI, PI};
-use std::ops::Range;
+use std::f32::consts::FRAC_1_PI;
 use std::sync::Arc;
 
-use super::grid::PhotonGrid;
 use super::photons::Photon;
-use super::renderer::{PixelEstimate, VisiblePoint};
 use super::visible::EyeResult;
 use crate::materials::Bsdf;
 use crate::scene::OpenEdges;
 use crate::spectrum::{SampledSpectrum, LANES};
-
-/// Photons on surfaces whose normal is within this cosine of perpendicular to the visible
-/// point's, on either side, mark an edge (a wall seen from the floor). Those facing more toward
-/// it are gathered; those facing more away lie behind it (the back of a thin wall). Walls meeting
-/// at right angles after a rotation can face each other by +-1e-7, so perpendicular must not be
-/// the boundary between gathered and not.
-pub(super) const EDGE_COSINE: f32 = 0.5;
-
-/// The biweight kernel of one radius and its Laplacian.
-#[derive(Clone, Copy)]
-pub(super) struct Kernel {
-    /// The radius, squared.
-    pub(super) r2: f32,
-    /// The kernel's factor: `K(t) = scale (1 - t^2)^2`.
-    pub(super) scale: f32,
-    /// Its Laplacian's factor: `laplacian_scale (1 - 2 t^2)`.
-    pub(super) laplacian_scale: f32,
-}
-
-impl Kernel {
-    pub(super) fn new(radius: f32) -> Self {
-        let r2 = radius * radius;
-        let scale = 3.0 / (PI * r2);
-        Kernel { r2, scale, laplacian_scale: -8.0 * scale / r2 }
-    }
-
-    /// The kernel mass the open edges `edges` near `p` (on a surface of normal `n`) cut off the
-    /// disc, per axis.
-    pub(super) fn open_edge_cut(&self, edges: &OpenEdges, p: Vec3, n: Vec3) -> Vec3 {
-        let radius = self.r2.sqrt();
-        edges.distances(p, n, radius).map(|d| kernel_mass_beyond(d / radius))
-    }
-
-    /// The wall through `at` of normal `ng` (a photon's surface, meeting the surface of normal
-    /// `n` at an edge) and the kernel mass its plane cuts off the disc around `p` (in that
-    /// surface's plane).
-    pub(super) fn wall(&self, ng: Vec3, at: Vec3, p: Vec3, n: Vec3) -> Wall {
-        let sine = (ng - ng.dot(n) * n).length();
-        let height = (p - at).dot(ng);
-        let mass = if sine < 0.5 { 0.0 } else { kernel_mass_beyond(height.abs() / sine / self.r2.sqrt()) };
-        Wall { at, normal: ng, point_side: height, mass }
-    }
-}
-
-/// The plane of a surface meeting a visible point's at an edge (a wall standing on the floor
-/// the point is on), found from a photon on it.
-#[derive(Clone, Copy, Default)]
-pub(super) struct Wall {
-    /// The photon's position.
-    at: Vec3,
-    /// Its surface's normal.
-    normal: Vec3,
-    /// The visible point's height above the plane, along `normal`.
-    point_side: f32,
-    /// The kernel mass the plane cuts off the point's disc (zero: it does not reach the disc).
-    mass: f32,
-}
-
-impl Wall {
-    /// This wall, or `other` where it cuts more off the disc.
-    fn or_if_cutting_more(self, other: Wall) -> Wall {
-        if other.mass > self.mass {
-            other
-        } else {
-            self
-        }
-    }
-
-    /// Keeps `wall` (of a surface of normal `ng`) among `walls` where it cuts more off the disc
-    /// than the one kept before along the same axis.
-    pub(super) fn keep_widest(walls: &mut [Wall; 3], wall: Wall, ng: Vec3) {
-        let axis = ng.abs().max_position();
-        walls[axis] = walls[axis].or_if_cutting_more(wall);
-    }
-
-    /// The kernel mass `walls` cut off, per axis.
-    pub(super) fn cut(walls: &[Wall; 3]) -> Vec3 {
-        Vec3::from(walls.map(|w| w.mass))
-    }
-
-    /// Whether `p` lies across the plane from the visible point.
-    fn separates(&self, p: Vec3) -> bool {
-        (p - self.at).dot(self.normal) * self.point_side < 0.0
-    }
-}
+use crate::transport::context::{PixelEstimate, VisiblePoint};
+use crate::transport::grid::{bucketed, PhotonGrid, Positions};
+use crate::transport::kernel::{kernel_mass_within, Kernel, Wall, EDGE_COSINE};
 
 /// What the gather reads of a photon besides its position: 48 bytes, where the whole photon
 /// takes 64.
@@ -291,77 +206,6 @@ pub fn sum_over(vp: &VisiblePoint, rounds: &[(&PhotonSet, FirstRound)]) -> Photo
     sums.unwrap_or_default()
 }
 
-/// `items` (at `position`) bucketed for lookups within `radius`, in parallel: the grid, what
-/// `arrival` reads of each item, in bucket order, and their positions in that order, kept apart.
-pub(super) fn bucketed<I: Sync, A: Send>(
-    items: &[I],
-    radius: f32,
-    position: impl Fn(&I) -> Vec3 + Sync,
-    arrival: impl Fn(&I) -> A + Sync,
-) -> (PhotonGrid, Vec<A>, Positions) {
-    let positions: Vec<Vec3> = items.par_iter().with_min_len(4096).map(&position).collect();
-    let (grid, order) = PhotonGrid::build(&positions, radius);
-    let sorted = order.par_iter().with_min_len(4096).map(|&i| arrival(&items[i as usize])).collect();
-    (grid, sorted, Positions::new(order.iter().map(|&i| positions[i as usize])))
-}
-
-/// Photon positions, one array per coordinate, so that four distances are tested at once.
-/// Each array has three more entries than photons, far away, for the last group of four.
-pub(super) struct Positions {
-    x: Vec<f32>,
-    y: Vec<f32>,
-    z: Vec<f32>,
-}
-
-impl Positions {
-    pub(super) fn new(points: impl ExactSizeIterator<Item = Vec3>) -> Self {
-        let padded = points.len() + 3;
-        let mut positions = Positions {
-            x: Vec::with_capacity(padded),
-            y: Vec::with_capacity(padded),
-            z: Vec::with_capacity(padded),
-        };
-        for p in points.chain([Vec3::INFINITY; 3]) {
-            positions.x.push(p.x);
-            positions.y.push(p.y);
-            positions.z.push(p.z);
-        }
-        positions
-    }
-
-    pub(super) fn at(&self, i: usize) -> Vec3 {
-        Vec3::new(self.x[i], self.y[i], self.z[i])
-    }
-
-    /// Calls `visit(i, d2)` for each photon `i` in `range` at squared distance `d2 < r2` from
-    /// `p`. About one candidate in six is within reach, unpredictably: four distances are tested
-    /// at a time, without branches, and only the hits are visited.
-    #[inline]
-    pub(super) fn for_each_within(
-        &self,
-        range: Range<usize>,
-        p: Vec3,
-        r2: f32,
-        mut visit: impl FnMut(usize, f32),
-    ) {
-        let lane = Vec4::new(0.0, 1.0, 2.0, 3.0);
-        for i in range.clone().step_by(4) {
-            let dx = Vec4::from_slice(&self.x[i..i + 4]) - p.x;
-            let dy = Vec4::from_slice(&self.y[i..i + 4]) - p.y;
-            let dz = Vec4::from_slice(&self.z[i..i + 4]) - p.z;
-            let d2 = dx * dx + dy * dy + dz * dz;
-            let in_range = lane.cmplt(Vec4::splat((range.end - i) as f32));
-            let mut hits = (d2.cmplt(Vec4::splat(r2)) & in_range).bitmask();
-            let d2 = d2.to_array();
-            while hits != 0 {
-                let k = hits.trailing_zeros() as usize;
-                visit(i + k, d2[k]);
-                hits &= hits - 1;
-            }
-        }
-    }
-}
-
 /// Sums photons' contributions at one visible point. The kernel and its Laplacian are sums of
 /// each photon's flux times a number; for a diffuse surface the BSDF is the same for every photon
 /// from the side it is seen from, and multiplies the sums once at the end.
@@ -497,10 +341,6 @@ pub struct PhotonSums {
     cut: Vec3,
 }
 
-/// The least kernel mass an estimate is divided by (where edges cut off more, as at the tip of
-/// a sharp wedge, they are not trusted to be straight).
-const LEAST_MASS_WITHIN: f32 = 0.25;
-
 impl PhotonSums {
     /// The kernel mass within the surface.
     fn kernel_mass_within(&self) -> f32 {
@@ -516,54 +356,5 @@ impl std::ops::Add for PhotonSums {
             laplacian: self.laplacian + o.laplacian,
             cut: self.cut.max(o.cut),
         }
-    }
-}
-
-/// The kernel mass left within a surface whose edges cut `cut` off the disc, per axis.
-pub(super) fn kernel_mass_within(cut: Vec3) -> f32 {
-    (1.0 - cut.element_sum()).max(LEAST_MASS_WITHIN)
-}
-
-/// The biweight kernel's mass beyond a line at distance `s` radii from its centre:
-/// `M(s) = 16 / (5 pi) * integral from s to 1 of (1 - t^2)^(5/2) dt` (the kernel's marginal along
-/// the line's normal), in closed form with `t = sin(phi)`.
-fn kernel_mass_beyond(s: f32) -> f32 {
-    if s >= 1.0 {
-        return 0.0;
-    }
-    let phi = s.max(0.0).asin();
-    let cos6_integral = 5.0 * phi / 16.0
-        + 15.0 / 64.0 * (2.0 * phi).sin()
-        + 3.0 / 64.0 * (4.0 * phi).sin()
-        + (6.0 * phi).sin() / 192.0;
-    (0.5 - 16.0 / (5.0 * PI) * cos6_integral).max(0.0)
-}
-
-#[cfg(test)]
-mod tests {
-    use super::*;
-
-    /// The closed form against the biweight summed over a fine grid of the disc beyond the line
-    /// `x = s` (radius 1): within 1e-4 at every distance, half the mass at the centre, none at 1.
-    #[test]
-    fn kernel_mass_beyond_a_line_matches_the_kernel_summed_there() {
-        let n = 2000;
-        let cell = 2.0 / n as f64;
-        for s in [0.0, 0.1, 0.3, 0.5, 0.7, 0.9, 1.0] {
-            let mut mass = 0.0;
-            for i in 0..n {
-                for j in 0..n {
-                    let (x, y) = (-1.0 + (i as f64 + 0.5) * cell, -1.0 + (j as f64 + 0.5) * cell);
-                    let t2 = x * x + y * y;
-                    if x > s && t2 < 1.0 {
-                        mass += 3.0 / std::f64::consts::PI * (1.0 - t2) * (1.0 - t2) * cell * cell;
-                    }
-                }
-            }
-            let closed = f64::from(kernel_mass_beyond(s as f32));
-            assert!((closed - mass).abs() < 1e-4, "s = {s}: closed form {closed}, summed {mass}");
-        }
-        assert!((kernel_mass_beyond(0.0) - 0.5).abs() < 1e-6);
-        assert_eq!(kernel_mass_beyond(1.0), 0.0);
     }
 }

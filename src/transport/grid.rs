@@ -5,7 +5,8 @@
 //! it. Photons are sorted by bucket with a counting sort in photon order (deterministic); the
 //! caller keeps its photons in that order, so a bucket's photons lie side by side in memory.
 
-use glam::{IVec3, Vec3};
+use glam::{IVec3, Vec3, Vec4};
+use std::ops::Range;
 
 use crate::geometry::{hash_cell, sort_into_buckets};
 use rayon::prelude::*;
@@ -86,6 +87,77 @@ mod tests {
             let expected: Vec<usize> =
                 (0..points.len()).filter(|&i| points[i].distance(q) < radius).collect();
             assert_eq!(found, expected);
+        }
+    }
+}
+
+/// `items` (at `position`) bucketed for lookups within `radius`, in parallel: the grid, what
+/// `arrival` reads of each item, in bucket order, and their positions in that order, kept apart.
+pub(crate) fn bucketed<I: Sync, A: Send>(
+    items: &[I],
+    radius: f32,
+    position: impl Fn(&I) -> Vec3 + Sync,
+    arrival: impl Fn(&I) -> A + Sync,
+) -> (PhotonGrid, Vec<A>, Positions) {
+    let positions: Vec<Vec3> = items.par_iter().with_min_len(4096).map(&position).collect();
+    let (grid, order) = PhotonGrid::build(&positions, radius);
+    let sorted = order.par_iter().with_min_len(4096).map(|&i| arrival(&items[i as usize])).collect();
+    (grid, sorted, Positions::new(order.iter().map(|&i| positions[i as usize])))
+}
+
+/// Photon positions, one array per coordinate, so that four distances are tested at once.
+/// Each array has three more entries than photons, far away, for the last group of four.
+pub(crate) struct Positions {
+    x: Vec<f32>,
+    y: Vec<f32>,
+    z: Vec<f32>,
+}
+
+impl Positions {
+    pub(crate) fn new(points: impl ExactSizeIterator<Item = Vec3>) -> Self {
+        let padded = points.len() + 3;
+        let mut positions = Positions {
+            x: Vec::with_capacity(padded),
+            y: Vec::with_capacity(padded),
+            z: Vec::with_capacity(padded),
+        };
+        for p in points.chain([Vec3::INFINITY; 3]) {
+            positions.x.push(p.x);
+            positions.y.push(p.y);
+            positions.z.push(p.z);
+        }
+        positions
+    }
+
+    pub(crate) fn at(&self, i: usize) -> Vec3 {
+        Vec3::new(self.x[i], self.y[i], self.z[i])
+    }
+
+    /// Calls `visit(i, d2)` for each photon `i` in `range` at squared distance `d2 < r2` from
+    /// `p`. About one candidate in six is within reach, unpredictably: four distances are tested
+    /// at a time, without branches, and only the hits are visited.
+    #[inline]
+    pub(crate) fn for_each_within(
+        &self,
+        range: Range<usize>,
+        p: Vec3,
+        r2: f32,
+        mut visit: impl FnMut(usize, f32),
+    ) {
+        let lane = Vec4::new(0.0, 1.0, 2.0, 3.0);
+        for i in range.clone().step_by(4) {
+            let dx = Vec4::from_slice(&self.x[i..i + 4]) - p.x;
+            let dy = Vec4::from_slice(&self.y[i..i + 4]) - p.y;
+            let dz = Vec4::from_slice(&self.z[i..i + 4]) - p.z;
+            let d2 = dx * dx + dy * dy + dz * dz;
+            let in_range = lane.cmplt(Vec4::splat((range.end - i) as f32));
+            let mut hits = (d2.cmplt(Vec4::splat(r2)) & in_range).bitmask();
+            let d2 = d2.to_array();
+            while hits != 0 {
+                let k = hits.trailing_zeros() as usize;
+                visit(i + k, d2[k]);
+                hits &= hits - 1;
+            }
         }
     }
 }

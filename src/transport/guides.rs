@@ -11,11 +11,11 @@
 
 use glam::Vec3;
 
-use super::renderer::{collect_counting, PassSamples, Renderer, MAX_DEPTH};
-use super::visible::start_eye_path;
+use super::context::{collect_counting, PassSamples, Renderer, MAX_DEPTH};
 use crate::geometry::offset_origin;
 use crate::materials::{Bsdf, Transport};
 use crate::spectrum::SampledSpectrum;
+use crate::transport::eye::start_eye_path;
 
 /// One pixel's guides for one pass.
 #[derive(Clone, Copy, Debug, Default)]

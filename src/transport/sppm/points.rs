@@ -7,8 +7,8 @@ use std::sync::atomic::{AtomicU64, Ordering};
 use glam::Vec3;
 use rayon::prelude::*;
 
-use super::grid::PhotonGrid;
 use super::photons::Photon;
+use crate::transport::grid::PhotonGrid;
 
 /// A mark per pixel, set from any thread.
 pub struct PixelMarks(Vec<AtomicU64>);

@@ -4,14 +4,14 @@
 
 use glam::Vec3;
 
-use super::media::Media;
-use super::renderer::{PassStats, Renderer, VisiblePoint};
-use super::see_through;
 use crate::geometry::offset_origin;
 use crate::materials::{BsdfSample, Transport};
 use crate::sampling::PixelSampler;
 use crate::scene::NOT_A_LIGHT;
 use crate::spectrum::{SampledSpectrum, Wavelengths};
+use crate::transport::context::{PassStats, Renderer, VisiblePoint};
+use crate::transport::media::Media;
+use crate::transport::see_through;
 
 /// Veach's power heuristic for two strategies with densities `p` (this one) and `q`.
 fn power_heuristic(p: f32, q: f32) -> f32 {

@@ -37,13 +37,13 @@ mod view;
 
 use rayon::prelude::*;
 
+use super::context::{collect_counting, PassSamples, PassStats, PixelEstimate, Renderer};
 use super::media::Media;
-use super::photons::photon_chunks;
-use super::renderer::{collect_counting, PassSamples, PassStats, PixelEstimate, Renderer};
 use super::see_through;
 use crate::geometry::offset_origin;
 use crate::scene::{media_scatter, Scene};
 use crate::spectrum::{SampledSpectrum, Wavelengths};
+use crate::transport::emission::photon_chunks;
 use eye_paths::{trace_camera_path, Lights};
 use glam::Vec3;
 use light_paths::{trace_light_path, LightVertex, Splat};

@@ -36,11 +36,11 @@ use crate::lights::Light;
 use crate::materials::{Bsdf, Material, ShadingFrame, Transport};
 use crate::scene::{Surface, NOT_A_LIGHT};
 use crate::spectrum::{hero_only, SampledSpectrum, LANES};
-use crate::sppm::photons::chunk_of;
+use crate::transport::context::{PassSamples, PassStats, PixelEstimate, Renderer, MAX_DEPTH};
+use crate::transport::emission::chunk_of;
 #[cfg(doc)]
-use crate::sppm::photons::photon_chunks;
-use crate::sppm::renderer::{PassSamples, PassStats, PixelEstimate, Renderer, MAX_DEPTH};
-use crate::sppm::visible::{start_eye_path, EyeState, Meeting};
+use crate::transport::emission::photon_chunks;
+use crate::transport::eye::{start_eye_path, EyeState, Meeting};
 
 /// Bounces before Russian roulette may end a camera path.
 const ROULETTE_AFTER: u32 = 3;
