@@ -114,19 +114,20 @@ pub fn run(
         scene.lights.len(),
         resolution[0],
         resolution[1],
-        shot.sppm().photons_per_pass,
+        shot.pass_settings().photons_per_pass,
         passes.start,
         passes.end,
         start.elapsed().as_secs_f64()
     );
-    let renderer = Renderer::new(&scene, &accel, shot.sppm().clone());
+    let renderer = Renderer::new(&scene, &accel, shot.pass_settings().clone());
     memory::reset_peak();
     in_pool(2, || time_passes(&renderer, passes.start..passes.start + 1))?;
     let pass_memory = peak_memory();
     let recorded = {
         let (scene, accel) = shot.pose(0.0);
         let accel = accel.recording();
-        Renderer::new(&scene, &accel, shot.sppm().clone()).run_pass(passes.start);
+        let renderer = Renderer::new(&scene, &accel, shot.pass_settings().clone());
+        renderer.run_pass(&renderer.pass_samples(passes.start));
         accel.recorded()
     };
     let mut fastest: [Option<Timed>; 2] = [None, None];
@@ -194,7 +195,8 @@ fn time_passes(renderer: &Renderer, passes: std::ops::Range<u64>) -> (PassStats,
     let mut film = Film::new(s.width, s.height, FilmMode::Spectral, 0, false);
     let (mut stats, mut accumulation_s) = (PassStats::default(), 0.0);
     for i in passes {
-        let (samples, estimates, pass_stats) = renderer.run_pass(i);
+        let samples = renderer.pass_samples(i);
+        let (estimates, pass_stats) = renderer.run_pass(&samples);
         let added = Instant::now();
         add_estimates(&mut film, &samples, &estimates);
         accumulation_s += added.elapsed().as_secs_f64();

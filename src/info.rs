@@ -138,9 +138,9 @@ pub fn report(settings: &RenderSettings) -> Result<Value, String> {
 /// uniform paths a visible point sees) and so what `--photon-sampling auto` uses there; photons
 /// per pass and the first radius.
 fn photons(settings: &RenderSettings, shot: &Shot, animated: bool, reuse: bool) -> Value {
-    let sppm = shot.sppm();
+    let pass_settings = shot.pass_settings();
     let (scene, accel) = shot.pose(0.0);
-    let (pilot_seen, settled_uniform) = Renderer::new(&scene, &accel, sppm.clone()).auto_at_load();
+    let (pilot_seen, settled_uniform) = Renderer::new(&scene, &accel, pass_settings.clone()).auto_at_load();
     let auto_uses = match animated || settled_uniform {
         true => "uniform",
         false => "visible",
@@ -155,8 +155,8 @@ fn photons(settings: &RenderSettings, shot: &Shot, animated: bool, reuse: bool) 
         "pilot_seen_fraction_pass_0": pilot_seen,
         "auto_uses_on_pass_0": auto_uses,
         "frames": shared,
-        "per_pass": sppm.photons_per_pass,
-        "initial_radius": sppm.initial_radius,
+        "per_pass": pass_settings.photons_per_pass,
+        "initial_radius": pass_settings.initial_radius,
         "radius_from": match (settings.radius, shot.view()) {
             (Some(_), _) => json!("--radius"),
             (None, Some(view)) => json!({"view_size": view.size, "photons_per_view": view.photons_per_view}),

@@ -1,4 +1,4 @@
-//! The first radius when none is given (`src/sppm/footprint.rs`): from the view where the camera
+//! The first radius when none is given (`src/transport/footprint.rs`): from the view where the camera
 //! sees surfaces and the photons a pass lands there, not from the scene's size. A close-up and a
 //! wide shot of one room get radii apart as their views' sizes to the 2/3; a render region gets
 //! the whole render's; a camera that sees no surface falls back to the scene's size.
@@ -114,7 +114,7 @@ fn a_render_region_gets_the_whole_renders_radius() {
     let radius = |crop: Option<[u32; 4]>| {
         let settings = RenderSettings { crop, ..settings(&scene, dir.path(), 1) };
         let description = Arc::new(load_description(&settings).unwrap());
-        Shot::new(&settings, description).unwrap().sppm().initial_radius
+        Shot::new(&settings, description).unwrap().pass_settings().initial_radius
     };
     assert_eq!(radius(None), radius(Some([3, 5, 10, 7])));
 }
@@ -131,7 +131,7 @@ fn every_frame_range_of_an_animated_shot_gets_the_same_radius() {
         let description = Arc::new(load_description(&settings).unwrap());
         let shot = Shot::new(&settings, description).unwrap();
         assert!(shot.view().is_some(), "the camera sees the box");
-        shot.sppm().initial_radius
+        shot.pass_settings().initial_radius
     };
     assert_eq!(radius(vec![5]), radius((1..=10).collect()));
     assert_eq!(radius(vec![5]), radius(vec![20, 21]));

@@ -229,7 +229,7 @@ pub struct EmittedPhoton {
 }
 
 /// How densely a light emits along one ray, for weighing photon paths against the other ways
-/// of sampling the same path (vertex connection and merging, `sppm/vcm/`). Light choice is not
+/// of sampling the same path (vertex connection and merging, `transport/vcm/`). Light choice is not
 /// included.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct EmissionDensity {

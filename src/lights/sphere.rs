@@ -175,7 +175,7 @@ impl SphereLight {
     }
 
     /// Samples light arriving at `p` from the sphere's own surface, as vertex connection and
-    /// merging meets a light with a radius (`sppm/vcm/`): a direction uniform over the solid angle
+    /// merging meets a light with a radius (`transport/vcm/`): a direction uniform over the solid angle
     /// the sphere covers, times Soft Falloff's factor at `p` where the light has it (which makes
     /// the sphere light `p` as the disc facing it does, exactly where the light is wholly above
     /// `p`'s horizon and unblocked). `None` for a point and from inside the sphere, which it does

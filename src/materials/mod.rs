@@ -51,7 +51,7 @@ pub use volume::{transmittance, Volume};
 /// Specular layers narrower than this GGX alpha (roughness 0.316) are not gathered at: eye paths
 /// take direct light there and sample on through the layer's own reflection, as through a mirror,
 /// or gather under it ([`Bsdf::is_gathered_at`]; metals are never gathered at, whatever their
-/// roughness: `sppm/visible.rs` says why).
+/// roughness: `transport/sppm/visible.rs` says why).
 pub const NARROW_COAT_ALPHA: f32 = 0.1;
 
 /// A BSDF at a path's wavelengths: reflectances per wavelength, indices at the hero's.

@@ -8,7 +8,7 @@
 //! smooth spectrum of that colour (`TransmittanceCurve`), so that the colour that comes through
 //! is per-channel Beer–Lambert's at every thickness, as Cycles gives it. A medium that scatters
 //! has a scattering coefficient too, and a Henyey–Greenstein anisotropy (`phase.rs`). Inside a
-//! closed mesh the path's own segments give the distances (`sppm/media.rs` keeps the stack of
+//! closed mesh the path's own segments give the distances (`transport/media.rs` keeps the stack of
 //! volumes a path is in); through a thin wall (an open mesh) the thickness factor does, over the
 //! cosine of the crossing, and only absorption counts there.
 

@@ -15,7 +15,6 @@ use crate::monitor::Monitor;
 use crate::progress::Progress;
 use crate::progress::ProgressStyle;
 use crate::scene::Scene;
-use crate::transport::Method;
 
 use crate::transport::{run_shared_pass, FrameEstimates, PassSamples, PassStats, PixelEstimate, Renderer};
 
@@ -26,7 +25,7 @@ impl Shot {
     /// SPPM's (VCM's paths are not shared yet).
     pub(super) fn shares(&self, settings: &RenderSettings, frames: usize) -> bool {
         settings.reuse
-            && settings.method == Method::Sppm
+            && settings.method.capabilities().reuses_across_frames
             && frames > 1
             && self.prepared.triangle_counts().0 > 0
             && !self.prepared.description.scatters()
@@ -38,10 +37,10 @@ impl Shot {
         if !self.shares(settings, frames) {
             return 1;
         }
-        let pixels = u64::from(self.sppm.width) * u64::from(self.sppm.height);
+        let pixels = u64::from(self.pass_settings.width) * u64::from(self.pass_settings.height);
         let guides = if settings.denoising_passes { GUIDE_SUMS } else { 0 };
         let per_frame = pixels * (FRAME_BYTES_PER_PIXEL + 8 * (settings.spectral_bins + guides) as u64);
-        let photons = self.sppm.photons_per_pass as u64 * PHOTON_BYTES_PER_PATH;
+        let photons = self.pass_settings.photons_per_pass as u64 * PHOTON_BYTES_PER_PATH;
         let shared = pixels * (BYTES_PER_PIXEL + SHARED_BYTES_PER_PIXEL) + photons;
         let fit = settings.memory_budget.saturating_sub(shared) / per_frame.max(1);
         (fit as usize).clamp(1, frames)
@@ -101,7 +100,7 @@ pub(super) fn render_block(
     frames: &[i32],
     report: &mut RenderReport,
 ) -> Result<(), String> {
-    let s = &shot.sppm;
+    let s = &shot.pass_settings;
     let mode = match s.fixed_wavelength_nm {
         Some(lambda_nm) => FilmMode::Monochromatic { lambda_nm },
         None => FilmMode::Spectral,
@@ -146,7 +145,7 @@ pub(super) fn render_block(
         } else {
             for (frame, posed) in active.iter_mut().zip(&poses) {
                 let (scene, accel) = posed.parts();
-                let (_, estimates, stats) = Renderer::new(scene, accel, s.clone()).run_pass(pass);
+                let (estimates, stats) = Renderer::new(scene, accel, s.clone()).run_pass(&samples);
                 let adding = Instant::now();
                 add_pass(frame, &samples, &estimates, stats);
                 accumulation += adding.elapsed();
@@ -224,7 +223,7 @@ pub(super) fn shared_pass(
     common: &mut Option<Film>,
     accumulation: &mut Duration,
 ) -> (PassStats, Duration) {
-    let s = &shot.sppm;
+    let s = &shot.pass_settings;
     let (first_scene, _) = poses[0].parts();
     let fixed_accel = shot.fixed_accel();
     let statics = Renderer::new(first_scene, &fixed_accel, s.clone());

@@ -13,7 +13,7 @@ use crate::scene::pose::Motion;
 use crate::scene::{Description, Prepared, Scene, TimeRange, DEFAULT_RADIUS_FRACTION};
 
 use crate::progress::ProgressStyle;
-use crate::transport::{Crop, LightSampling, Method, PhotonSampling, SppmSettings, ViewMeasure};
+use crate::transport::{Crop, LightSampling, Method, PassSettings, PhotonSampling, ViewMeasure};
 
 /// Everything `caustic render` was asked for.
 #[derive(Clone, Debug)]
@@ -134,7 +134,7 @@ pub fn default_radius(scene: &Scene, view: Option<ViewMeasure>, photons_per_pass
 /// scene is animated, so that frames sharing photon paths (reuse across frames, which draws them
 /// uniformly) give the images `--no-reuse` and a farm's single frames give.
 pub(super) fn photon_sampling(settings: &RenderSettings, description: &Description) -> PhotonSampling {
-    if settings.method == Method::Vcm {
+    if !settings.method.capabilities().samples_photons_by_visibility {
         return PhotonSampling::Uniform;
     }
     match settings.photon_sampling {
@@ -237,7 +237,7 @@ pub fn frame_path(out_dir: &Path, frame: i32) -> PathBuf {
 
 /// Everything that shapes a pass beyond the scene: what partial results must share to merge.
 pub(super) fn fingerprint(
-    sppm: &SppmSettings,
+    pass_settings: &PassSettings,
     shutter: Shutter,
     prepared: &Prepared,
     settings: &RenderSettings,
@@ -245,16 +245,16 @@ pub(super) fn fingerprint(
     let lens =
         prepared.lens().map(|l| [l.aperture_radius, l.focus_distance, l.blades as f32, l.blade_rotation]);
     serde_json::json!({
-        "resolution": [sppm.width, sppm.height],
-        "crop": [sppm.crop.image, sppm.crop.origin],
-        "photons_per_pass": sppm.photons_per_pass,
-        "alpha": sppm.alpha,
-        "initial_radius": sppm.initial_radius,
-        "seed": sppm.seed,
-        "wavelength_nm": sppm.fixed_wavelength_nm,
-        "light_sampling": format!("{:?}", sppm.light_sampling),
-        "photon_sampling": format!("{:?}", sppm.photon_sampling),
-        "method": format!("{:?}", sppm.method),
+        "resolution": [pass_settings.width, pass_settings.height],
+        "crop": [pass_settings.crop.image, pass_settings.crop.origin],
+        "photons_per_pass": pass_settings.photons_per_pass,
+        "alpha": pass_settings.alpha,
+        "initial_radius": pass_settings.initial_radius,
+        "seed": pass_settings.seed,
+        "wavelength_nm": pass_settings.fixed_wavelength_nm,
+        "light_sampling": format!("{:?}", pass_settings.light_sampling),
+        "photon_sampling": format!("{:?}", pass_settings.photon_sampling),
+        "method": format!("{:?}", pass_settings.method),
         "spectral_bins": settings.spectral_bins,
         "denoising_passes": settings.denoising_passes,
         "shutter": [shutter.open, shutter.length],

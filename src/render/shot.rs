@@ -15,9 +15,9 @@ use crate::sampling::pass_time_sample;
 use crate::scene::description::{Lens, Shutter};
 use crate::scene::pose::{lens, Motion};
 use crate::scene::{Description, Prepared, Scene, TimeRange};
-use crate::transport::{Method, PhotonSampling};
+use crate::transport::PhotonSampling;
 
-use crate::transport::{vcm_unsupported, Renderer, SppmSettings, ViewMeasure};
+use crate::transport::{PassSettings, Renderer, ViewMeasure};
 
 /// A render of one scene over its frames: the prepared time range and what every frame shares.
 pub struct Shot {
@@ -27,7 +27,7 @@ pub struct Shot {
     pub(super) instanced_bvh: Option<Arc<InstancedBvh>>,
     pub(super) still: Option<(Scene, Accel)>,
     pub(super) shutter: Shutter,
-    pub(super) sppm: SppmSettings,
+    pub(super) pass_settings: PassSettings,
     /// For partial results: the scene's SHA-256 and the settings that shape every pass.
     pub(super) identity: Option<(String, serde_json::Value)>,
     /// The view the first radius was measured from.
@@ -57,7 +57,7 @@ impl Shot {
         let instanced_bvh = prepared.instanced_bvh();
         let first = prepared.pose(range.start);
         let photons_per_pass = settings.photons.unwrap_or((full_width * full_height) as usize);
-        let sppm = SppmSettings {
+        let pass_settings = PassSettings {
             width,
             height,
             crop,
@@ -71,21 +71,28 @@ impl Shot {
             photon_sampling,
             method: settings.method,
         };
-        if settings.method == Method::Vcm {
-            if let Some(what) = vcm_unsupported(&first) {
-                return Err(format!(
-                    "--method vcm does not render {what} yet; render this scene with --method sppm"
-                ));
-            }
+        if let Some(what) = settings.method.unsupported(&first) {
+            return Err(format!(
+                "--method {} does not render {what} yet; render this scene with --method sppm",
+                settings.method.flag()
+            ));
         }
         let still_accel =
             || Accel::new(Arc::clone(&fixed_bvh), Bvh::empty()).with_instances(instanced_bvh.clone());
         let still = (!prepared.has_motion()).then(|| (first, still_accel()));
-        let mut shot =
-            Shot { prepared, fixed_bvh, instanced_bvh, still, shutter, sppm, identity: None, view: None };
+        let mut shot = Shot {
+            prepared,
+            fixed_bvh,
+            instanced_bvh,
+            still,
+            shutter,
+            pass_settings,
+            identity: None,
+            view: None,
+        };
         shot.settle_from_view(lens, settings.radius.is_none());
         if settings.partial_passes.is_some() {
-            let fingerprint = fingerprint(&shot.sppm, shutter, &shot.prepared, settings);
+            let fingerprint = fingerprint(&shot.pass_settings, shutter, &shot.prepared, settings);
             shot.identity = Some((partial::scene_sha256(&settings.scene)?, fingerprint));
         }
         Ok(shot)
@@ -101,8 +108,8 @@ impl Shot {
         let description = Arc::clone(&self.prepared.description);
         if default_radius {
             let measure = |scene: &Scene, accel: &Accel| {
-                let view = Renderer::new(scene, accel, self.sppm.clone()).measure_view();
-                (view, self::default_radius(scene, view, self.sppm.photons_per_pass))
+                let view = Renderer::new(scene, accel, self.pass_settings.clone()).measure_view();
+                (view, self::default_radius(scene, view, self.pass_settings.photons_per_pass))
             };
             let (view, radius) = match &self.still {
                 Some((scene, accel)) if !is_animated(&description) => measure(scene, accel),
@@ -115,16 +122,16 @@ impl Shot {
                     measure(&instant.pose(time), &accel)
                 }
             };
-            (self.view, self.sppm.initial_radius) = (view, radius);
+            (self.view, self.pass_settings.initial_radius) = (view, radius);
         }
-        let mostly_seen = match (&self.still, self.sppm.photon_sampling) {
+        let mostly_seen = match (&self.still, self.pass_settings.photon_sampling) {
             (Some((scene, accel)), PhotonSampling::Auto) => {
-                Renderer::new(scene, accel, self.sppm.clone()).auto_at_load().1
+                Renderer::new(scene, accel, self.pass_settings.clone()).auto_at_load().1
             }
             _ => false,
         };
         if mostly_seen {
-            self.sppm.photon_sampling = PhotonSampling::Uniform;
+            self.pass_settings.photon_sampling = PhotonSampling::Uniform;
         }
     }
 
@@ -135,8 +142,8 @@ impl Shot {
     }
 
     /// The SPPM settings every pass uses.
-    pub fn sppm(&self) -> &SppmSettings {
-        &self.sppm
+    pub fn pass_settings(&self) -> &PassSettings {
+        &self.pass_settings
     }
 
     /// The shutter.
@@ -184,7 +191,8 @@ impl Shot {
 
     /// The time of pass `index` of `frame`: one point of the shutter, the same for every frame.
     pub(super) fn pass_time(&self, frame: i32, index: u64) -> f32 {
-        let offset = self.shutter.open + pass_time_sample(self.sppm.seed, index) * self.shutter.length;
+        let offset =
+            self.shutter.open + pass_time_sample(self.pass_settings.seed, index) * self.shutter.length;
         seconds(frame as f32 + offset, self.prepared.description.fps)
     }
 }
@@ -202,11 +210,13 @@ impl Shot {
 /// has left as the first run did.
 pub fn render(settings: &RenderSettings) -> Result<RenderReport, String> {
     let description = Arc::new(load_description(settings)?);
-    if settings.method == Method::Vcm && settings.photon_sampling != PhotonSampling::Uniform {
+    let by_visibility = settings.method.capabilities().samples_photons_by_visibility;
+    if !by_visibility && settings.photon_sampling != PhotonSampling::Uniform {
         let chosen = clap::ValueEnum::to_possible_value(&settings.photon_sampling);
         eprintln!(
-            "caustic: warning: --photon-sampling {} is not used by --method vcm, whose light paths are drawn uniformly",
-            chosen.map_or_else(String::new, |v| v.get_name().to_string())
+            "caustic: warning: --photon-sampling {} is not used by --method {}, whose light paths are drawn uniformly",
+            chosen.map_or_else(String::new, |v| v.get_name().to_string()),
+            settings.method.flag()
         );
     }
     std::fs::create_dir_all(&settings.out_dir)
@@ -222,7 +232,7 @@ pub fn render(settings: &RenderSettings) -> Result<RenderReport, String> {
         }
         span_settings.frames = span;
         let shot = Shot::new(&span_settings, Arc::clone(&description))?;
-        span_settings.radius = Some(shot.sppm.initial_radius);
+        span_settings.radius = Some(shot.pass_settings.initial_radius);
         report.fixed_bvh_builds += 1;
         let block_frames = shot.block_frames(settings, todo.len());
         if block_frames > 1 && settings.photon_sampling == PhotonSampling::Visible {

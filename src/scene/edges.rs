@@ -1,6 +1,6 @@
 //! Open edges: where a surface ends in the open (a wall's front edge, a table top's rim, the
 //! border of a plane). The gather's disc reaches past such an edge, where no photons of the
-//! surface land, and renormalises its kernel by the distance to it (`sppm/gather.rs`).
+//! surface land, and renormalises its kernel by the distance to it (`transport/kernel.rs`).
 //!
 //! An edge is open when one triangle alone has it, after welding corners at equal positions
 //! across every mesh (exporters split vertices at seams and sharp edges; two meshes that share a

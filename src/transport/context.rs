@@ -12,6 +12,7 @@ use crate::scene::{media_scatter, Scene};
 use crate::spectrum::{SampledSpectrum, Wavelengths};
 
 use super::media::{media_at, Media};
+use super::method::Method;
 use super::radius;
 
 /// Longest path (bounces) an eye path follows through delta surfaces, and a photon overall.
@@ -96,7 +97,7 @@ impl Crop {
 
 /// Settings of the SPPM passes.
 #[derive(Clone, Debug)]
-pub struct SppmSettings {
+pub struct PassSettings {
     /// The window of the image the film covers.
     pub crop: Crop,
     /// Film width in pixels (the crop's).
@@ -119,34 +120,6 @@ pub struct SppmSettings {
     pub photon_sampling: PhotonSampling,
     /// How a pass combines camera and light paths.
     pub method: Method,
-}
-
-/// How a pass combines camera paths and light paths into its estimate.
-#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, clap::ValueEnum)]
-pub enum Method {
-    /// Stochastic progressive photon mapping: photons gathered at each pixel's first vertex that
-    /// is not a delta or glossy lobe.
-    #[default]
-    Sppm,
-    /// Vertex connection and merging: photon merging where SPPM gathers and at glossy vertices
-    /// before, combined with connections, light tracing and path tracing by multiple importance
-    /// sampling.
-    Vcm,
-}
-
-impl Method {
-    /// Knaus & Zwicker's alpha where none is given. SPPM's is their 2/3, which balances the
-    /// gather's variance and bias. Merging carries less of VCM's image and shrinks more slowly
-    /// with 0.8 (Georgiev et al.'s implementation uses 0.75): relative MSE at equal CPU time 13-20%
-    /// lower on the diffuse box (10, 100 and 600 CPU s), 5% lower on the caustic box at 100 s and
-    /// equal at 10 s, 1% lower on the glossy interior (one run each, 2026-11-27; 0.5, 0.35 and 0.9
-    /// were worse).
-    pub fn default_alpha(self) -> f64 {
-        match self {
-            Method::Sppm => 2.0 / 3.0,
-            Method::Vcm => 0.8,
-        }
-    }
 }
 
 /// How next-event estimation chooses a light (photons always leave lights in proportion to their
@@ -173,7 +146,7 @@ pub enum PhotonSampling {
     Auto,
 }
 
-impl SppmSettings {
+impl PassSettings {
     /// The wavelengths and radius of pass `index` (0-based).
     pub fn pass_samples(&self, index: u64) -> PassSamples {
         let wavelengths = match self.fixed_wavelength_nm {
@@ -310,7 +283,7 @@ pub struct Renderer<'a> {
     pub(super) light_choice: Arc<Distribution1D>,
     /// The scene's light tree, where next-event estimation uses it.
     light_tree: Option<&'a LightTree>,
-    pub(super) settings: SppmSettings,
+    pub(super) settings: PassSettings,
     /// Some material's alpha cuts its surface away somewhere: shadow rays look through.
     pub(super) has_cut_away_surfaces: bool,
     /// Some material absorbs inside, or the world has fog: paths keep the stack of the insides
@@ -348,8 +321,16 @@ impl StartMedia {
 }
 
 impl<'a> Renderer<'a> {
+    /// Renders `pass` by the settings' method: one estimate per pixel, in row-major order.
+    pub fn run_pass(&self, pass: &PassSamples) -> (Vec<PixelEstimate>, PassStats) {
+        match self.settings.method {
+            Method::Sppm => self.run_sppm_pass(pass),
+            Method::Vcm => self.run_vcm_pass(pass),
+        }
+    }
+
     /// A renderer for `scene`; lights are chosen in proportion to their power.
-    pub fn new(scene: &'a Scene, accel: &'a Accel, settings: SppmSettings) -> Self {
+    pub fn new(scene: &'a Scene, accel: &'a Accel, settings: PassSettings) -> Self {
         Renderer::with_light_choice(scene, accel, Arc::clone(&scene.light_choice), settings)
     }
 
@@ -357,7 +338,7 @@ impl<'a> Renderer<'a> {
         scene: &'a Scene,
         accel: &'a Accel,
         light_choice: Arc<Distribution1D>,
-        settings: SppmSettings,
+        settings: PassSettings,
     ) -> Self {
         let mut renderer = Renderer {
             scene,
@@ -381,7 +362,7 @@ impl<'a> Renderer<'a> {
     }
 
     /// This renderer with `settings` instead.
-    pub(super) fn with_settings(&self, settings: SppmSettings) -> Renderer<'a> {
+    pub(super) fn with_settings(&self, settings: PassSettings) -> Renderer<'a> {
         Renderer::with_light_choice(self.scene, self.accel, Arc::clone(&self.light_choice), settings)
     }
 
@@ -413,7 +394,7 @@ impl<'a> Renderer<'a> {
     }
 
     /// The settings.
-    pub fn settings(&self) -> &SppmSettings {
+    pub fn settings(&self) -> &PassSettings {
         &self.settings
     }
 

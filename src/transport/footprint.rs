@@ -17,7 +17,7 @@
 //! points of the film's size there ([`crate::camera::Camera::film_size_at`]); the density is the
 //! count of photons of pass 0's first uniform paths within `PROBE_RADIUS` of those points.
 
-use super::context::{Crop, PhotonSampling, Renderer, SppmSettings};
+use super::context::{Crop, PassSettings, PhotonSampling, Renderer};
 use super::sppm::photon_sampling::{trace_pilot, AUTO_VISIBLE_BELOW};
 use super::sppm::points::PointGrid;
 
@@ -84,7 +84,7 @@ impl Renderer<'_> {
         let [width, height] = self.settings.crop.image;
         let scale = (PROBE_PIXELS / (f64::from(width) * f64::from(height))).sqrt().min(1.0);
         let probe = [width, height].map(|n| ((f64::from(n) * scale).round() as u32).max(1));
-        let settings = SppmSettings {
+        let settings = PassSettings {
             crop: Crop::whole(probe),
             width: probe[0],
             height: probe[1],

@@ -14,7 +14,7 @@ use glam::Vec3;
 
 use super::context::Renderer;
 use super::free_flight::equiangular;
-use super::see_through;
+use super::shadow::ShadowRay;
 use crate::materials::{Bsdf, ShadingFrame, Volume};
 use crate::spectrum::{SampledSpectrum, Wavelengths};
 
@@ -43,8 +43,7 @@ pub fn in_scattered(
     let Some(sample) = light.sample_incident(x, u_point, lambda) else { return SampledSpectrum::ZERO };
     let wo = -direction;
     let phase = Bsdf::Medium { scattering, anisotropy }.eval(ShadingFrame::new(wo, wo), wo, sample.wi);
-    let t_max = sample.distance * (1.0 - 1e-4);
-    let through = see_through::visibility(renderer, lambda, x, sample.wi, t_max);
+    let through = ShadowRay::within(x, sample.wi, sample.distance).visibility(renderer, lambda);
     if through <= 0.0 {
         return SampledSpectrum::ZERO;
     }

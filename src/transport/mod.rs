@@ -10,7 +10,7 @@
 //! - what both use: the per-pass context ([`Renderer`], `context.rs`), the start of eye paths
 //!   (`eye.rs`) and of light paths (`emission.rs`), the kernel and its walls (`kernel.rs`), the
 //!   photon grid (`grid.rs`), the radius sequence (`radius.rs`), media (`media.rs`,
-//!   `free_flight.rs`, `medium_light.rs`), shadow rays through alpha (`see_through.rs`);
+//!   `free_flight.rs`, `medium_light.rs`), shadow rays (`shadow.rs`, through alpha: `see_through.rs`);
 //! - reuse across frames (`reuse.rs`, Weiss & Grosch's DSPPM): paths on static geometry traced
 //!   once for a block of frames.
 
@@ -24,19 +24,21 @@ mod guides;
 mod kernel;
 mod media;
 mod medium_light;
+mod method;
 pub mod radius;
 mod reuse;
 mod see_through;
+mod shadow;
 mod sppm;
 mod vcm;
 
 pub use context::{
-    Crop, LightSampling, Method, PassSamples, PassStats, PhotonSampling, PixelEstimate, Renderer,
-    SppmSettings, VisiblePoint, MAX_DEPTH,
+    Crop, LightSampling, PassSamples, PassSettings, PassStats, PhotonSampling, PixelEstimate, Renderer,
+    VisiblePoint, MAX_DEPTH,
 };
 pub use footprint::ViewMeasure;
 pub use guides::Guide;
+pub use method::{Capabilities, Method};
 pub use reuse::{run_shared_pass, FrameEstimates, SharedPassOutput};
 pub use sppm::photon_sampling::AUTO_VISIBLE_BELOW;
 pub use sppm::photons::Photon;
-pub use vcm::unsupported as vcm_unsupported;

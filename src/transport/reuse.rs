@@ -32,7 +32,7 @@ use glam::Vec3;
 use rayon::prelude::*;
 
 use super::context::{collect_counting, PassSamples, PassStats, PixelEstimate, Renderer};
-use super::sppm::direct::ShadowRay;
+use super::shadow::ShadowRay;
 use super::sppm::gather::{sum_over, FirstRound, PhotonSet, PhotonSums};
 use super::sppm::photons::{continue_photon, trace_photon, Photon};
 use super::sppm::points::{PixelMarks, PointGrid};

@@ -12,6 +12,7 @@ use crate::spectrum::{SampledSpectrum, Wavelengths};
 use crate::transport::context::{PassStats, Renderer, VisiblePoint};
 use crate::transport::media::Media;
 use crate::transport::see_through;
+use crate::transport::shadow::{self, ShadowRay};
 
 /// Veach's power heuristic for two strategies with densities `p` (this one) and `q`.
 fn power_heuristic(p: f32, q: f32) -> f32 {
@@ -40,17 +41,6 @@ pub struct DirectLight<'a> {
     pub material: u32,
 }
 
-/// A ray that must reach its end for a direct-light term to count.
-#[derive(Clone, Copy, Debug)]
-pub struct ShadowRay {
-    /// Where it starts (already offset from the surface).
-    pub origin: Vec3,
-    /// Its unit direction.
-    pub direction: Vec3,
-    /// How far it must be free.
-    pub t_max: f32,
-}
-
 /// One direct-light estimate, and the ray it travelled (`None` when the term is zero whatever
 /// else is in the scene).
 #[derive(Clone, Copy, Debug)]
@@ -70,12 +60,8 @@ impl DirectLight<'_> {
     /// What the volume a ray leaving the point toward `wi` runs through keeps of light over
     /// `length` (all of it outside volumes).
     fn kept(&self, wi: Vec3, length: f32) -> SampledSpectrum {
-        if !self.renderer.has_volumes {
-            return SampledSpectrum::ONE;
-        }
-        let (scene, point) = (self.renderer.scene, self.point);
-        let media = self.media.crossed(scene, self.material, point.frame.ng(), point.wo, wi);
-        media.transmittance(scene, self.wavelengths, length).unwrap_or(SampledSpectrum::ONE)
+        let ends = (self.point.frame.ng(), self.point.wo);
+        shadow::kept(self.renderer, self.wavelengths, (self.media, self.material), ends, wi, length)
     }
 
     /// One light-sampled and one BSDF-sampled term, to be combined by MIS (their sum).
@@ -103,10 +89,8 @@ impl DirectLight<'_> {
             return DirectTerm::ZERO;
         }
         stats.shadow_rays += 1;
-        let origin = offset_origin(point.p, ng, sample.wi, point.scale());
-        let t_max = if sample.distance.is_finite() { sample.distance * (1.0 - 1e-4) } else { f32::INFINITY };
-        let ray = ShadowRay { origin, direction: sample.wi, t_max };
-        let through = see_through::visibility(renderer, wavelengths, origin, sample.wi, t_max);
+        let ray = ShadowRay::leaving(point.p, (ng, point.scale()), sample.wi, sample.distance);
+        let through = ray.visibility(renderer, wavelengths);
         if through <= 0.0 {
             return DirectTerm::ZERO;
         }

@@ -8,20 +8,15 @@ use super::beams::{add_beams, in_media, Beam};
 use super::gather::{gather, PhotonSet};
 use super::photon_sampling::visible_points;
 use super::visible::{continue_eye_path, trace_eye_path, EyeEvent, EyeResult};
-use crate::transport::context::{collect_counting, Method, PassSamples, PassStats, PixelEstimate, Renderer};
+use crate::transport::context::{collect_counting, PassSamples, PassStats, PixelEstimate, Renderer};
 use crate::transport::eye::start_eye_path;
 
 /// Pixels an eye pass with beams traces as one task.
 const BEAM_CHUNK: usize = 256;
 
 impl<'a> Renderer<'a> {
-    /// Renders pass `index`: one estimate per pixel, in row-major order.
-    pub fn run_pass(&self, index: u64) -> (PassSamples, Vec<PixelEstimate>, PassStats) {
-        let pass = self.pass_samples(index);
-        if self.settings.method == Method::Vcm {
-            let (estimates, stats) = self.run_vcm_pass(&pass);
-            return (pass, estimates, stats);
-        }
+    /// Renders `pass` by SPPM: one estimate per pixel, in row-major order.
+    pub(crate) fn run_sppm_pass(&self, pass: &PassSamples) -> (Vec<PixelEstimate>, PassStats) {
         let mut clock = Instant::now();
         let mut lap = || {
             let ns = clock.elapsed().as_nanos() as u64;
@@ -29,16 +24,16 @@ impl<'a> Renderer<'a> {
             ns
         };
         let (points, beams, eye_stats) = match self.has_scattering {
-            true => self.trace_visible_points_and_beams(&pass),
+            true => self.trace_visible_points_and_beams(pass),
             false => {
-                let (points, stats) = self.trace_visible_points(&pass);
+                let (points, stats) = self.trace_visible_points(pass);
                 (points, Vec::new(), stats)
             }
         };
         let eye_ns = lap();
-        let (photons, photon_stats) = match self.whole_image_points(&pass) {
-            Some(whole) => self.trace_photons(&pass, visible_points(&whole)),
-            None => self.trace_photons(&pass, visible_points(&points)),
+        let (photons, photon_stats) = match self.whole_image_points(pass) {
+            Some(whole) => self.trace_photons(pass, visible_points(&whole)),
+            None => self.trace_photons(pass, visible_points(&points)),
         };
         let photon_ns = lap();
         let (photons, media) = match self.has_scattering {
@@ -55,7 +50,7 @@ impl<'a> Renderer<'a> {
             add_beams(&mut estimates, &beams, media, &pass.wavelengths);
         }
         let stages = PassStats { stage_ns: [eye_ns, photon_ns, grid_ns, lap()], ..PassStats::default() };
-        (pass, estimates, eye_stats + photon_stats + stages)
+        (estimates, eye_stats + photon_stats + stages)
     }
 
     /// Every pixel's eye path, and its segments through media that scatter as beams, in pixel

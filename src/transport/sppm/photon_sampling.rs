@@ -25,7 +25,7 @@ use super::photons::{continue_photon, trace_photon, Photon};
 use super::points::PointGrid;
 use super::visible::EyeResult;
 use crate::sampling::{stream, wrap_unit, Sampler, Stream, Uniforms};
-use crate::transport::context::{Crop, PassSamples, PassStats, PhotonSampling, Renderer, SppmSettings};
+use crate::transport::context::{Crop, PassSamples, PassSettings, PassStats, PhotonSampling, Renderer};
 use crate::transport::emission::{emit_photon, photon_stream};
 
 /// The share of a pass's photon paths traced uniformly first, as the pilot.
@@ -104,7 +104,7 @@ impl Renderer<'_> {
             return None;
         }
         let [width, height] = crop.image;
-        let whole = SppmSettings { crop: Crop::whole(crop.image), width, height, ..self.settings.clone() };
+        let whole = PassSettings { crop: Crop::whole(crop.image), width, height, ..self.settings.clone() };
         Some(self.with_settings(whole).trace_visible_points(pass).0)
     }
 }

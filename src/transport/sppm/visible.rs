@@ -25,13 +25,14 @@
 
 use glam::Vec3;
 
-use super::direct::{DirectLight, DirectTerm, ShadowRay};
+use super::direct::{DirectLight, DirectTerm};
 use crate::geometry::offset_origin;
 use crate::materials::{Lobe, Transport, Volume};
 use crate::spectrum::{hero_only, SampledSpectrum, Wavelengths};
 use crate::transport::context::{PassSamples, PassStats, Renderer, VisiblePoint, MAX_DEPTH};
 use crate::transport::eye::{start_eye_path, EyeState, Meeting};
 use crate::transport::medium_light::in_scattered;
+use crate::transport::shadow::ShadowRay;
 
 /// A pixel's eye path: the radiance found along it, and its visible point if it has one.
 #[derive(Clone, Copy, Debug)]

@@ -7,10 +7,11 @@ use glam::Vec3;
 use super::light_paths::{joined, LightVertex};
 use super::merge::CameraVertex;
 use super::mis::{connection, DirectWeight, End, PassWeights};
-use super::{finite, kept, visibility};
+use super::{finite, visibility};
 use crate::sampling::PixelSampler;
 use crate::spectrum::SampledSpectrum;
 use crate::transport::context::{PassSamples, PassStats, Renderer};
+use crate::transport::shadow::kept;
 
 /// Whether light arriving at `camera` from `wi` can leave toward its way back.
 fn reaches(camera: &CameraVertex, wi: Vec3) -> bool {

@@ -6,7 +6,7 @@ use glam::{Vec2, Vec3, Vec3A};
 
 use super::mis::{light_traced, End, LightPartials, MergeVertex, Partials, PassWeights, Scatter};
 use super::view::View;
-use super::{kept, visibility};
+use super::visibility;
 use crate::geometry::offset_origin;
 use crate::lights::SoftFalloff;
 use crate::materials::{Bsdf, Lobe, Transport};
@@ -15,6 +15,7 @@ use crate::spectrum::{hero_only, SampledSpectrum, LANES};
 use crate::transport::context::{PassSamples, PassStats, Renderer, MAX_DEPTH};
 use crate::transport::emission::photon_stream;
 use crate::transport::media::Media;
+use crate::transport::shadow::kept;
 
 /// A vertex of a light subpath where its BSDF is not a delta.
 #[derive(Clone, Copy, Debug)]

@@ -38,11 +38,8 @@ mod view;
 use rayon::prelude::*;
 
 use super::context::{collect_counting, PassSamples, PassStats, PixelEstimate, Renderer};
-use super::media::Media;
-use super::see_through;
-use crate::geometry::offset_origin;
-use crate::scene::{media_scatter, Scene};
-use crate::spectrum::{SampledSpectrum, Wavelengths};
+use super::shadow::ShadowRay;
+use crate::spectrum::SampledSpectrum;
 use crate::transport::emission::photon_chunks;
 use eye_paths::{trace_camera_path, Lights};
 use glam::Vec3;
@@ -50,12 +47,6 @@ use light_paths::{trace_light_path, LightVertex, Splat};
 use merge::MergeSet;
 use mis::PassWeights;
 use view::View;
-
-/// Why `scene` cannot be rendered by vertex connection and merging yet, if it cannot.
-pub fn unsupported(scene: &Scene) -> Option<String> {
-    media_scatter(&scene.materials, &scene.fog)
-        .then(|| "media that scatter (volume scattering or fog)".into())
-}
 
 /// `value`, or zero where it is not a finite number (a weight or density that overflowed at a
 /// grazing angle or between nearly touching vertices).
@@ -65,28 +56,6 @@ fn finite(value: SampledSpectrum) -> SampledSpectrum {
     } else {
         SampledSpectrum::ZERO
     }
-}
-
-/// What the volume a segment leaving a vertex toward `w` runs through keeps of light over
-/// `length` (all of it where nothing absorbs): the volumes `media` the path arrived in, crossed
-/// into the inside of the surface's `material` (geometric normal `ng`, arrived from `wo`) where
-/// `w` goes in.
-fn kept(
-    renderer: &Renderer,
-    lambda: &Wavelengths,
-    (media, material): (Media, u32),
-    (ng, wo): (Vec3, Vec3),
-    w: Vec3,
-    length: f32,
-) -> SampledSpectrum {
-    if !renderer.has_volumes {
-        return SampledSpectrum::ONE;
-    }
-    let scene = renderer.scene;
-    media
-        .crossed(scene, material, ng, wo, w)
-        .transmittance(scene, lambda, length)
-        .unwrap_or(SampledSpectrum::ONE)
 }
 
 /// How much of the light along the segment from `a` (on a triangle of geometric normal `ng`
@@ -100,9 +69,7 @@ fn visibility(
     stats: &mut PassStats,
 ) -> f32 {
     stats.shadow_rays += 1;
-    let origin = offset_origin(a, ng, direction, scale);
-    let t_max = if distance.is_finite() { distance * (1.0 - 1e-4) } else { f32::INFINITY };
-    see_through::visibility(renderer, &pass.wavelengths, origin, direction, t_max)
+    ShadowRay::leaving(a, (ng, scale), direction, distance).visibility(renderer, &pass.wavelengths)
 }
 
 /// One chunk of a pass's light subpaths: their vertices path after path, where each path's
