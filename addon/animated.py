@@ -5,7 +5,7 @@ on the pointers `KHR_animation_pointer` uses, so the renderer reads both the sam
 
 Blender's exporter can write these itself (`export_pointer_animation`), but together with
 `export_apply` it raises an IndexError on a scene with an armature-skinned mesh and animated values
-(FACTS.md), so Caustic samples them here, after the export, from the same frames.
+(Blender 5.0.1's glTF exporter), so Caustic samples them here, after the export, from the same frames.
 """
 
 import math

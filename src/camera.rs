@@ -12,7 +12,7 @@ use glam::{Mat4, Vec2, Vec3};
 
 use crate::sampling::{square_to_disc, square_to_triangle};
 
-/// The thin lens of a camera (DESIGN.md: aperture radius = focal length / (2 f-stop), as Cycles).
+/// The thin lens of a camera (aperture radius = focal length / (2 f-stop), as Cycles computes it).
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct Lens {
     /// Aperture radius in scene units (zero: a pinhole).

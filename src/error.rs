@@ -1,4 +1,4 @@
-//! The error of a frame (DESIGN.md step 6): per-pixel bounds from the film's sums, frame
+//! The error of a frame (docs/design.md, step 6): per-pixel bounds from the film's sums, frame
 //! summaries, the true error against a reference, and the stopping rule.
 //!
 //! Hachisuka, Jarosz & Jensen 2010, "A Progressive Error Estimation Framework for Photon Density

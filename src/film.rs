@@ -1,4 +1,4 @@
-//! The film (DESIGN.md step 5): per-pixel sums over passes, and the EXR they become.
+//! The film (docs/design.md, step 5): per-pixel sums over passes, and the EXR they become.
 //!
 //! A pixel keeps only sums: of the pass estimates converted to XYZ (the mean over the pass's four
 //! wavelengths of `L cmf(lambda) / p(lambda)`),

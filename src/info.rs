@@ -1,5 +1,5 @@
 //! `caustic info SCENE [--frames SPEC]`: what a scene needs and what the renderer will skip
-//! (DESIGN.md, "Leave out what a scene does not need"), as JSON.
+//! (docs/design.md, "Leave out what a scene does not need"), as JSON.
 
 use serde_json::{json, Value};
 

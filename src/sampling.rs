@@ -1,7 +1,7 @@
 //! Random streams, the per-pass low-discrepancy sequence, and warps from the unit square.
 //!
 //! Every stream is keyed by `(seed, pass, index)` alone, never by thread or time, so a render is
-//! the same bits with any thread count and any pass range (DESIGN.md, "Determinism").
+//! the same bits with any thread count and any pass range (docs/design.md, "Determinism").
 
 use glam::{Vec2, Vec3};
 use rand::RngExt;

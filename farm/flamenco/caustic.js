@@ -116,7 +116,7 @@ function authorMergeTask(settings, folders, frame, files) {
     return task;
 }
 
-// The partial result `caustic render --partial` writes (src/partial.rs, `partial_path`).
+// The partial result `caustic render --partial` writes (src/render/partial.rs, `partial_path`).
 function partialFile(folder, frame, first, end) {
     return path.join(folder, `frame_${String(frame).padStart(4, "0")}.passes_${first}-${end}.partial`);
 }

@@ -1,6 +1,6 @@
 //! Lights: emission, next-event estimation toward a point, and photon emission.
 //!
-//! Radiometric units (one place for all of them, DESIGN.md "Input"): every light's colour is an
+//! Radiometric units (one place for all of them, docs/design.md, "Input"): every light's colour is an
 //! [`Illuminant`]: an [`RgbSpectrum`] shape times D65 normalised to luminance 1 (or a black body's
 //! spectrum, for a colour temperature), times a scalar in the unit below.
 //! - point and spot: radiant intensity in W/sr (glTF candela / 683; Blender writes W / (4 pi) * 683);

@@ -199,7 +199,7 @@ impl Shot {
 
 /// Renders every frame of `settings.frames` and writes `OUT/frame_####.exr` for each.
 ///
-/// Frames are rendered pass-major in blocks (DESIGN.md, "Frames, and reuse across frames"): every
+/// Frames are rendered pass-major in blocks (docs/design.md, "Frames, and reuse across frames"): every
 /// frame of a block renders pass 0, then pass 1, and so on, sharing the paths that the static part
 /// of the scene makes alike. The block is as long as the memory budget allows.
 ///

@@ -1,5 +1,5 @@
 //! Posing a [`Description`] at a time: the fixed part once per time range, the moving part per
-//! time (DESIGN.md: static geometry is built once per range; moving objects per time).
+//! time (docs/design.md, "Frames, and reuse across frames": static geometry is built once per range, moving objects per time).
 //!
 //! A mesh, light or camera is moving over a range when its node or an ancestor has a track whose
 //! value changes within it (a mesh also when a joint of its skin moves or its morph target weights

@@ -159,7 +159,7 @@ impl PassSettings {
     }
 }
 
-/// What pass `i` shares between all its pixels and photons (DESIGN.md step 1).
+/// What pass `i` shares between all its pixels and photons (docs/design.md, step 1).
 #[derive(Clone, Copy, Debug)]
 pub struct PassSamples {
     /// The pass index, from 0.

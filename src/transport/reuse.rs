@@ -1,5 +1,5 @@
 //! One pass shared by a block of frames (Weiss & Grosch 2012, "Stochastic Progressive Photon
-//! Mapping for Dynamic Scenes"; DESIGN.md, "Frames, and reuse across frames").
+//! Mapping for Dynamic Scenes"; docs/design.md, "Frames, and reuse across frames").
 //!
 //! Every frame of the block renders the same pass: the same wavelengths, shutter point, radius
 //! and random streams. Paths are traced once against the static triangles, and every segment

@@ -1,4 +1,4 @@
-//! The gather (DESIGN.md step 4): at each visible point, the photons within the pass radius,
+//! The gather (docs/design.md, step 4): at each visible point, the photons within the pass radius,
 //! weighted by a smooth kernel and the BSDF.
 //!
 //! The kernel is the normalised 2-D biweight `K(t) = 3 / (pi r^2) (1 - t^2)^2`, `t = d / r`

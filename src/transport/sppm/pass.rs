@@ -1,4 +1,4 @@
-//! One whole pass for one frame (DESIGN.md steps 1 to 4): its samples, the eye pass, the photon
+//! One whole pass for one frame (docs/design.md, steps 1 to 4): its samples, the eye pass, the photon
 //! pass and the gather.
 
 use rayon::prelude::*;

@@ -1,4 +1,4 @@
-//! The photon pass (DESIGN.md step 3): photons leave lights chosen by power, carrying the pass's
+//! The photon pass (docs/design.md, step 3): photons leave lights chosen by power, carrying the pass's
 //! wavelengths, and random-walk with Russian roulette. A photon is stored at every non-delta
 //! vertex from the second on: the first is direct light, which next-event estimation counts. In
 //! a medium that scatters, a photon meets events by free flight (`free_flight.rs`); at each it

@@ -1,4 +1,4 @@
-//! The eye pass (DESIGN.md step 2): a camera ray per pixel, followed through delta bounces and
+//! The eye pass (docs/design.md, step 2): a camera ray per pixel, followed through delta bounces and
 //! glossy lobes to the first surface photons are gathered at
 //! ([`crate::materials::Bsdf::is_gathered_at`]), where direct light is estimated by next-event
 //! estimation and a visible point is left for the photons (direct light: [`DirectLight`]).
