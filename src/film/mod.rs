@@ -15,16 +15,17 @@
 //! illuminant at that wavelength (a white surface under a white light is 1) in the colour of that
 //! wavelength, brought into the Rec.709 gamut by adding white at constant luminance.
 
-use std::path::Path;
-
-use exr::prelude::*;
 use glam::DVec3;
 use rayon::prelude::*;
 
-use crate::spectrum::{
-    cmf, d65, d65_xyz, linear_rec709_to_xyz, xyz_to_linear_rec709, SampledSpectrum, Wavelengths,
-    LAMBDA_MAX_NM, LAMBDA_MIN_NM, LANES,
-};
+mod output;
+mod spectral;
+#[cfg(test)]
+mod tests;
+
+pub use spectral::{display_xyz, SpectralBins, MAX_SPECTRAL_BINS};
+
+use crate::spectrum::{cmf, d65, SampledSpectrum, Wavelengths, LANES};
 
 /// How the film weighs each pass's wavelength.
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -36,34 +37,6 @@ pub enum FilmMode {
         /// The wavelength.
         lambda_nm: f32,
     },
-}
-
-/// The most spectral bins (5 nm wide over 360..830 nm, so their names stay distinct).
-pub const MAX_SPECTRAL_BINS: usize = 94;
-
-/// Per-pixel sums of spectral radiance in equal wavelength bands over 360..830 nm.
-#[derive(Clone, Debug, Default)]
-pub struct SpectralBins {
-    /// Number of bands.
-    pub count: usize,
-    /// `count` sums per pixel, pixel-major.
-    pub sums: Vec<f64>,
-}
-
-impl SpectralBins {
-    fn width_nm(&self) -> f64 {
-        f64::from(LAMBDA_MAX_NM - LAMBDA_MIN_NM) / self.count as f64
-    }
-
-    /// The band holding `lambda_nm`.
-    fn band(&self, lambda_nm: f32) -> usize {
-        (((f64::from(lambda_nm - LAMBDA_MIN_NM)) / self.width_nm()) as usize).min(self.count - 1)
-    }
-
-    /// The channel name of band `k`: its centre wavelength.
-    pub fn channel_name(&self, k: usize) -> String {
-        format!("Spectral.{:.0}nm", f64::from(LAMBDA_MIN_NM) + (k as f64 + 0.5) * self.width_nm())
-    }
 }
 
 /// One pixel's estimate of one pass: its radiance, its Laplacian term and its coverage.
@@ -85,19 +58,6 @@ struct PassWeights {
 /// The XYZ of lane values weighed by `weights` ([`Film::lane_weights`]).
 fn lanes_xyz(weights: &[DVec3; LANES], values: SampledSpectrum) -> DVec3 {
     weights.iter().zip(values.to_array()).map(|(w, v)| *w * f64::from(v)).sum()
-}
-
-/// The XYZ, of luminance 1, of the colour shown for light of one wavelength: the spectral colour
-/// with just enough white added to bring it into the Rec.709 gamut.
-pub fn display_xyz(lambda_nm: f32) -> DVec3 {
-    let xyz = cmf(lambda_nm).as_dvec3();
-    if xyz.y <= 0.0 {
-        return DVec3::ZERO;
-    }
-    let rgb = xyz_to_linear_rec709(xyz / xyz.y);
-    let lowest = rgb.min_element().min(0.0);
-    // Rec.709 (1, 1, 1) has luminance 1, so this keeps the luminance at 1.
-    linear_rec709_to_xyz((rgb - DVec3::splat(lowest)) / (1.0 - lowest))
 }
 
 /// The f64 numbers one pixel's sums are stored as (see [`Film::pixel_sums`]).
@@ -379,106 +339,6 @@ impl Film {
             }
         }
     }
-
-    /// The guides' channels (name, one value per pixel): the mean albedo, white-balanced and in
-    /// linear Rec.709, and the mean normal.
-    fn guide_channels(&self) -> Vec<(&'static str, Vec<f32>)> {
-        if self.guides.is_empty() {
-            return Vec::new();
-        }
-        let balance = self.white_balance();
-        let passes = self.passes.max(1) as f64;
-        let pixels: Vec<[f64; GUIDE_SUMS]> = self
-            .guides
-            .chunks_exact(GUIDE_SUMS)
-            .map(|s| {
-                let rgb = xyz_to_linear_rec709(DVec3::new(s[0], s[1], s[2]) / passes * balance);
-                [rgb.x, rgb.y, rgb.z, s[3] / passes, s[4] / passes, s[5] / passes]
-            })
-            .collect();
-        let names = [
-            "Denoising Albedo.R",
-            "Denoising Albedo.G",
-            "Denoising Albedo.B",
-            "Denoising Normal.X",
-            "Denoising Normal.Y",
-            "Denoising Normal.Z",
-        ];
-        names
-            .iter()
-            .enumerate()
-            .map(|(k, name)| (*name, pixels.iter().map(|p| p[k] as f32).collect()))
-            .collect()
-    }
-
-    /// The per-channel XYZ scale that makes the passes' white estimate exact.
-    fn white_balance(&self) -> DVec3 {
-        if self.mode != FilmMode::Spectral || self.passes == 0 || self.white_xyz.min_element() <= 0.0 {
-            return DVec3::ONE;
-        }
-        d65_xyz() / (self.white_xyz / self.passes as f64)
-    }
-
-    /// The luminance the white illuminant should have (the white balance's target): 1 for
-    /// spectral films, and 1 per pass weight without white balance.
-    pub fn white_target_y(&self) -> f64 {
-        match self.mode {
-            FilmMode::Spectral => d65_xyz().y,
-            FilmMode::Monochromatic { .. } => 1.0,
-        }
-    }
-
-    /// The mean linear Rec.709 colour of every pixel.
-    pub fn rgb(&self) -> Vec<DVec3> {
-        let balance = self.white_balance();
-        self.pixels
-            .iter()
-            .map(|s| {
-                if s.passes == 0 {
-                    return DVec3::ZERO;
-                }
-                xyz_to_linear_rec709(s.xyz / s.passes as f64 * balance)
-            })
-            .collect()
-    }
-
-    /// The mean coverage (alpha) of every pixel (1 before any pass).
-    pub fn alpha(&self) -> Vec<f32> {
-        self.pixels
-            .iter()
-            .map(|s| if s.passes == 0 { 1.0 } else { (s.coverage / s.passes as f64) as f32 })
-            .collect()
-    }
-
-    /// Writes the image, with `extra` channels (name, one value per pixel), to `path` through a
-    /// temporary file beside it.
-    pub fn write_exr(&self, path: &Path, extra: &[(&str, Vec<f32>)]) -> std::result::Result<(), String> {
-        let rgb = self.rgb();
-        let (w, h) = (self.width as usize, self.height as usize);
-        let channel = |name: &str, values: Vec<f32>| AnyChannel::new(name, FlatSamples::F32(values));
-        let component = |k: usize| rgb.iter().map(|c| c[k] as f32).collect::<Vec<f32>>();
-        let mut list = vec![
-            channel("Combined.R", component(0)),
-            channel("Combined.G", component(1)),
-            channel("Combined.B", component(2)),
-            channel("Combined.A", self.alpha()),
-        ];
-        for (name, values) in extra.iter().cloned().chain(self.guide_channels()) {
-            list.push(channel(name, values));
-        }
-        for k in 0..self.bins.count {
-            let passes = self.passes.max(1) as f64;
-            let band =
-                (0..w * h).map(|i| (self.bins.sums[i * self.bins.count + k] / passes) as f32).collect();
-            list.push(channel(&self.bins.channel_name(k), band));
-        }
-        let channels = AnyChannels::sort(SmallVec::from_vec(list));
-        let layer = Layer::new((w, h), LayerAttributes::default(), Encoding::SMALL_LOSSLESS, channels);
-        let image = Image::from_layer(layer);
-        crate::output::write_whole(path, |temporary| {
-            image.write().to_file(temporary).map_err(|e| format!("cannot write {}: {e}", path.display()))
-        })
-    }
 }
 
 /// Adds `sign` (1 or -1) times a pixel's estimate to its sums (not its pass count) and spectral
@@ -510,103 +370,4 @@ fn add_estimate(
         }
     }
     non_finite
-}
-
-#[cfg(test)]
-mod tests {
-    use super::*;
-    use crate::sampling::pass_sample;
-
-    /// Adds `passes` passes in which every pixel sees `radiance(lambda)`.
-    fn film_of(passes: u64, radiance: impl Fn(f32) -> f32) -> Film {
-        let mut film = Film::new(2, 1, FilmMode::Spectral, 0, false);
-        for i in 0..passes {
-            let lambda = Wavelengths::sampled(pass_sample(5, i));
-            let pixel = (
-                SampledSpectrum::from_array(lambda.nm.to_array().map(&radiance)),
-                SampledSpectrum::ZERO,
-                1.0,
-            );
-            film.add_pass(&lambda, 0.1, |_| pixel);
-        }
-        film
-    }
-
-    #[test]
-    fn a_spectrum_proportional_to_d65_is_exactly_grey_after_any_number_of_passes() {
-        for passes in [1, 3, 17] {
-            let rgb = film_of(passes, |l| 0.25 * d65(l)).rgb()[0];
-            assert!((rgb - DVec3::splat(0.25)).abs().max_element() < 1e-6, "{passes} passes: {rgb}");
-        }
-    }
-
-    #[test]
-    fn one_wavelength_shows_white_as_luminance_one_in_its_own_colour() {
-        for lambda in [450.0, 550.0, 650.0] {
-            let mut film = Film::new(1, 1, FilmMode::Monochromatic { lambda_nm: lambda }, 0, false);
-            let white = SampledSpectrum::splat(0.5 * d65(lambda));
-            film.add_pass(&Wavelengths::single(lambda, 1.0), 0.1, |_| (white, SampledSpectrum::ZERO, 1.0));
-            let rgb = film.rgb()[0];
-            let luminance = 0.2126 * rgb.x + 0.7152 * rgb.y + 0.0722 * rgb.z;
-            assert!((luminance - 0.5).abs() < 1e-3 && rgb.min_element() >= -1e-9, "{lambda}: {rgb}");
-        }
-        let blue = film_rgb_at(450.0);
-        let red = film_rgb_at(650.0);
-        assert!(blue.z > blue.x && red.x > red.z);
-    }
-
-    fn film_rgb_at(lambda: f32) -> DVec3 {
-        xyz_to_linear_rec709(display_xyz(lambda))
-    }
-
-    #[test]
-    fn spectral_bins_average_the_spectral_radiance_of_their_band() {
-        let mut film = Film::new(1, 1, FilmMode::Spectral, 47, false);
-        for i in 0..10_000 {
-            let lambda = Wavelengths::sampled(pass_sample(9, i));
-            film.add_pass(&lambda, 0.1, |_| (SampledSpectrum::splat(2.0), SampledSpectrum::ZERO, 1.0));
-        }
-        let bands: Vec<f64> = film.bins.sums.iter().map(|s| s / film.passes as f64).collect();
-        // A flat spectrum of 2 per nm: every 10 nm band averages 2.
-        assert!(bands.iter().all(|b| (b - 2.0).abs() < 0.1), "{bands:?}");
-        assert_eq!(film.bins.channel_name(0), "Spectral.365nm");
-    }
-
-    /// Passes and differences, added on blocks of pixels in parallel, land on the pixels they
-    /// name across block boundaries, spectral bands included: the same sums, bit for bit, as
-    /// adding them pixel by pixel.
-    #[test]
-    fn passes_and_differences_land_on_their_pixels_across_blocks() {
-        let (pixels, bands) = (10_000, 3);
-        let mut film = Film::new(5000, 2, FilmMode::Spectral, bands, false);
-        let lambda = Wavelengths::sampled(pass_sample(3, 0));
-        let estimate =
-            |i: usize| (SampledSpectrum::splat(i as f32), SampledSpectrum::splat(0.5), (i % 2) as f32);
-        let own = |i: usize| (SampledSpectrum::splat(2.0 * i as f32), SampledSpectrum::ZERO, 1.0);
-        film.add_pass(&lambda, 0.1, estimate);
-        let changed: Vec<usize> = (0..pixels).filter(|i| i % 977 == 3 || (4095..=4096).contains(i)).collect();
-        film.add_differences(&lambda, 0.1, changed.len(), |k| {
-            (changed[k], own(changed[k]), estimate(changed[k]))
-        });
-        let weights = film.pass_weights(&lambda, 0.1);
-        for i in 0..pixels {
-            let (mut sums, mut pixel_bands) =
-                (PixelSums { passes: 1, ..PixelSums::default() }, vec![0.0; bands]);
-            add_estimate(&weights, &mut sums, &mut pixel_bands, estimate(i), 1.0);
-            if changed.contains(&i) {
-                add_estimate(&weights, &mut sums, &mut pixel_bands, own(i), 1.0);
-                add_estimate(&weights, &mut sums, &mut pixel_bands, estimate(i), -1.0);
-            }
-            assert_eq!(film.pixels[i], sums, "pixel {i}");
-            assert_eq!(film.bins.sums[i * bands..(i + 1) * bands], pixel_bands[..], "pixel {i}'s bands");
-        }
-        assert!(changed.len() > 10 && film.bins.sums.iter().any(|&b| b != 0.0));
-    }
-
-    #[test]
-    fn non_finite_estimates_are_counted_and_do_not_poison_the_pixel() {
-        let film = film_of(16, |l| if l < 550.0 { f32::NAN } else { d65(l) });
-        assert!(film.non_finite_estimates > 0);
-        assert!(film.rgb().iter().all(|c| c.is_finite()));
-    }
 }
