@@ -3,20 +3,21 @@
 //! pass to its frame's film.
 
 use std::borrow::Cow;
+use std::sync::Arc;
 use std::time::{Duration, Instant};
 
-use super::report::{finish_frames, stop_reason, RenderReport};
-use super::settings::{RenderSettings, BYTES_PER_PIXEL};
-use super::shot::Shot;
+use super::report::{finish_frames, stop_reason, FrameInProgress, RenderReport};
+use super::settings::{load_description, output_path, shutter, RenderSettings, BYTES_PER_PIXEL};
+use super::shot::{motion_spans, Posed, Shot};
 use super::{stop_requested, DEFAULT_PASSES};
-use crate::accel::Accel;
 use crate::film::{Estimate, Film, FilmMode, GUIDE_SUMS};
 use crate::monitor::Monitor;
 use crate::progress::Progress;
 use crate::progress::ProgressStyle;
-use crate::scene::Scene;
 
-use crate::transport::{run_shared_pass, FrameEstimates, PassSamples, PassStats, PixelEstimate, Renderer};
+use crate::transport::{
+    run_shared_pass, FrameEstimates, PassSamples, PassStats, PhotonSampling, PixelEstimate, Renderer,
+};
 
 impl Shot {
     /// Whether a block of `frames` frames shares paths: reuse is on, there is more than one
@@ -57,31 +58,6 @@ pub(super) const SHARED_BYTES_PER_PIXEL: u64 = 704;
 
 /// What one pass holds per photon path (its photons and the segments frames check), generously.
 pub(super) const PHOTON_BYTES_PER_PATH: u64 = 256;
-
-/// A frame while its block renders.
-pub(super) struct FrameInProgress {
-    pub(super) frame: i32,
-    pub(super) film: Film,
-    pub(super) monitor: Monitor,
-    pub(super) stats: PassStats,
-    /// Its share of the block's wall-clock time.
-    pub(super) elapsed_s: f64,
-}
-
-/// A pose to render a pass in: the shot's still one, a frame's own, or one made for the pass.
-pub(super) enum Posed<'a> {
-    Borrowed(&'a Scene, &'a Accel),
-    Owned(Scene, Accel),
-}
-
-impl Posed<'_> {
-    pub(super) fn parts(&self) -> (&Scene, &Accel) {
-        match self {
-            Posed::Borrowed(scene, accel) => (scene, accel),
-            Posed::Owned(scene, accel) => (scene, accel),
-        }
-    }
-}
 
 /// The passes a frame renders at most: a partial result's range, else `--passes`, else none
 /// when a time budget or a target error ends it, else the default.
@@ -289,4 +265,56 @@ pub fn add_estimates(film: &mut Film, samples: &PassSamples, estimates: &[PixelE
 /// What the film adds of a pixel estimate.
 pub(super) fn sums(e: &PixelEstimate) -> Estimate {
     (e.radiance, e.laplacian, e.coverage)
+}
+
+/// Renders every frame of `settings.frames` and writes `OUT/frame_####.exr` for each.
+///
+/// Frames are rendered pass-major in blocks (docs/design.md, "Frames, and reuse across frames"): every
+/// frame of a block renders pass 0, then pass 1, and so on, sharing the paths that the static part
+/// of the scene makes alike. The block is as long as the memory budget allows.
+///
+/// Reuse is decided per span of frames over which the same things move (see [`motion_spans`]):
+/// each span is prepared on its own, so an object that moves only in frames 10 to 12 is static
+/// geometry for the frames before and after. Every span renders with the first span's radius.
+/// Spans are found over every frame asked for, so a `--resume`d render prepares the frames it
+/// has left as the first run did.
+pub fn render(settings: &RenderSettings) -> Result<RenderReport, String> {
+    let description = Arc::new(load_description(settings)?);
+    let by_visibility = settings.method.capabilities().samples_photons_by_visibility;
+    if !by_visibility && settings.photon_sampling != PhotonSampling::Uniform {
+        let chosen = clap::ValueEnum::to_possible_value(&settings.photon_sampling);
+        eprintln!(
+            "caustic: warning: --photon-sampling {} is not used by --method {}, whose light paths are drawn uniformly",
+            chosen.map_or_else(String::new, |v| v.get_name().to_string()),
+            settings.method.flag()
+        );
+    }
+    std::fs::create_dir_all(&settings.out_dir)
+        .map_err(|e| format!("cannot create output folder {}: {e}", settings.out_dir.display()))?;
+    let mut report = RenderReport::default();
+    let done = |f: &i32| settings.resume && output_path(settings, *f).exists();
+    report.skipped = settings.frames.iter().copied().filter(done).collect();
+    let mut span_settings = settings.clone();
+    for span in motion_spans(&description, &settings.frames, shutter(settings, &description)) {
+        let todo: Vec<i32> = span.iter().copied().filter(|f| !done(f)).collect();
+        if todo.is_empty() && span_settings.radius.is_some() {
+            continue;
+        }
+        span_settings.frames = span;
+        let shot = Shot::new(&span_settings, Arc::clone(&description))?;
+        span_settings.radius = Some(shot.pass_settings.initial_radius);
+        report.fixed_bvh_builds += 1;
+        let block_frames = shot.block_frames(settings, todo.len());
+        if block_frames > 1 && settings.photon_sampling == PhotonSampling::Visible {
+            eprintln!(
+                "caustic: warning: frames {:?} share their photon paths (reuse across frames), which are drawn uniformly; --no-reuse draws each frame's by visibility",
+                span_settings.frames
+            );
+        }
+        report.block_frames = report.block_frames.max(block_frames);
+        for block in todo.chunks(block_frames) {
+            render_block(&shot, settings, block, &mut report)?;
+        }
+    }
+    Ok(report)
 }

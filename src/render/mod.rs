@@ -15,10 +15,11 @@ mod shot;
 pub use crate::progress::ProgressStyle;
 pub use crate::transport::{LightSampling, Method, PhotonSampling};
 pub use blocks::add_estimates;
+pub use blocks::render;
 pub use merge::merge;
 pub use report::{write_frame, FrameReport, RenderReport, TimeSplit};
 pub use settings::*;
-pub use shot::{motion_spans, render, Shot};
+pub use shot::{motion_spans, Shot};
 
 /// Set when the user asks the render to stop (Ctrl-C, SIGTERM): the pass in flight finishes,
 /// frames not yet written are dropped, and the render ends with an error naming what was kept.

@@ -3,13 +3,12 @@
 
 use std::path::{Path, PathBuf};
 
-use super::blocks::FrameInProgress;
 use super::partial;
 use super::settings::{output_path, RenderSettings};
 use super::shot::Shot;
 use crate::error::{summarize, ErrorSummary, PixelError};
 use crate::film::{Film, FilmMode};
-use crate::monitor::StopReason;
+use crate::monitor::{Monitor, StopReason};
 use crate::progress::Progress;
 use rayon::prelude::*;
 
@@ -192,4 +191,14 @@ pub(super) fn write_output(
         _ => write_frame(film, errors, &path)?,
     }
     Ok(path)
+}
+
+/// A frame while its block renders.
+pub(super) struct FrameInProgress {
+    pub(super) frame: i32,
+    pub(super) film: Film,
+    pub(super) monitor: Monitor,
+    pub(super) stats: PassStats,
+    /// Its share of the block's wall-clock time.
+    pub(super) elapsed_s: f64,
 }

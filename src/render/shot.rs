@@ -3,12 +3,10 @@
 
 use std::sync::Arc;
 
-use super::blocks::{render_block, Posed};
 use super::partial;
-use super::report::RenderReport;
 use super::settings::{
-    check_resolution, crop, default_radius, fingerprint, is_animated, lens_settings, load_description,
-    output_path, photon_sampling, resolution, seconds, shutter, time_range, RenderSettings,
+    check_resolution, crop, default_radius, fingerprint, is_animated, lens_settings, photon_sampling,
+    resolution, seconds, shutter, time_range, RenderSettings,
 };
 use crate::accel::{Accel, BuildFor, Bvh, InstancedBvh};
 use crate::sampling::pass_time_sample;
@@ -197,58 +195,6 @@ impl Shot {
     }
 }
 
-/// Renders every frame of `settings.frames` and writes `OUT/frame_####.exr` for each.
-///
-/// Frames are rendered pass-major in blocks (docs/design.md, "Frames, and reuse across frames"): every
-/// frame of a block renders pass 0, then pass 1, and so on, sharing the paths that the static part
-/// of the scene makes alike. The block is as long as the memory budget allows.
-///
-/// Reuse is decided per span of frames over which the same things move (see [`motion_spans`]):
-/// each span is prepared on its own, so an object that moves only in frames 10 to 12 is static
-/// geometry for the frames before and after. Every span renders with the first span's radius.
-/// Spans are found over every frame asked for, so a `--resume`d render prepares the frames it
-/// has left as the first run did.
-pub fn render(settings: &RenderSettings) -> Result<RenderReport, String> {
-    let description = Arc::new(load_description(settings)?);
-    let by_visibility = settings.method.capabilities().samples_photons_by_visibility;
-    if !by_visibility && settings.photon_sampling != PhotonSampling::Uniform {
-        let chosen = clap::ValueEnum::to_possible_value(&settings.photon_sampling);
-        eprintln!(
-            "caustic: warning: --photon-sampling {} is not used by --method {}, whose light paths are drawn uniformly",
-            chosen.map_or_else(String::new, |v| v.get_name().to_string()),
-            settings.method.flag()
-        );
-    }
-    std::fs::create_dir_all(&settings.out_dir)
-        .map_err(|e| format!("cannot create output folder {}: {e}", settings.out_dir.display()))?;
-    let mut report = RenderReport::default();
-    let done = |f: &i32| settings.resume && output_path(settings, *f).exists();
-    report.skipped = settings.frames.iter().copied().filter(done).collect();
-    let mut span_settings = settings.clone();
-    for span in motion_spans(&description, &settings.frames, shutter(settings, &description)) {
-        let todo: Vec<i32> = span.iter().copied().filter(|f| !done(f)).collect();
-        if todo.is_empty() && span_settings.radius.is_some() {
-            continue;
-        }
-        span_settings.frames = span;
-        let shot = Shot::new(&span_settings, Arc::clone(&description))?;
-        span_settings.radius = Some(shot.pass_settings.initial_radius);
-        report.fixed_bvh_builds += 1;
-        let block_frames = shot.block_frames(settings, todo.len());
-        if block_frames > 1 && settings.photon_sampling == PhotonSampling::Visible {
-            eprintln!(
-                "caustic: warning: frames {:?} share their photon paths (reuse across frames), which are drawn uniformly; --no-reuse draws each frame's by visibility",
-                span_settings.frames
-            );
-        }
-        report.block_frames = report.block_frames.max(block_frames);
-        for block in todo.chunks(block_frames) {
-            render_block(&shot, settings, block, &mut report)?;
-        }
-    }
-    Ok(report)
-}
-
 /// `frames` split, in order, into spans over which the same things move. A span's time is cut
 /// into pieces: its first frame's shutter, then for each next frame the time from the frame
 /// before's shutter closing to its own closing. A frame joins the span before it when its piece
@@ -274,4 +220,19 @@ pub fn motion_spans(description: &Description, frames: &[i32], shutter: Shutter)
         spans.push((vec![frame], own));
     }
     spans.into_iter().map(|(span, _)| span).collect()
+}
+
+/// A pose to render a pass in: the shot's still one, a frame's own, or one made for the pass.
+pub(super) enum Posed<'a> {
+    Borrowed(&'a Scene, &'a Accel),
+    Owned(Scene, Accel),
+}
+
+impl Posed<'_> {
+    pub(super) fn parts(&self) -> (&Scene, &Accel) {
+        match self {
+            Posed::Borrowed(scene, accel) => (scene, accel),
+            Posed::Owned(scene, accel) => (scene, accel),
+        }
+    }
 }

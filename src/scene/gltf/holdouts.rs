@@ -2,7 +2,7 @@
 
 use crate::scene::values::MaterialAnimation;
 
-use super::meshes::is_closed;
+use super::instances::is_closed;
 use super::Builder;
 
 use crate::materials::Material;

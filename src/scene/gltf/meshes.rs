@@ -108,32 +108,6 @@ pub(super) fn matching_attribute<T: Default + Clone>(
     vec![T::default(); count]
 }
 
-/// Whether the triangles of `instances` close up: every edge (matched by its end positions,
-/// rounded to a millionth of the mesh's size, so that seams whose vertices differ in their last
-/// bits still match) is shared by an even number of triangles.
-pub(super) fn is_closed(instances: &[MeshInstance]) -> bool {
-    let corners = || {
-        instances
-            .iter()
-            .flat_map(|m| m.triangles.iter().flat_map(|t| t.vertices.map(|v| m.positions[v as usize])))
-    };
-    let Some((lo, hi)) = corners().map(|p| (p, p)).reduce(|(a, b), (c, d)| (a.min(c), b.max(d))) else {
-        return true;
-    };
-    let quantum = ((hi - lo).max_element() * 1e-6).max(f32::MIN_POSITIVE);
-    let key = |p: Vec3| ((p - lo) / quantum).round().as_i64vec3().to_array();
-    let mut edges: std::collections::HashMap<([i64; 3], [i64; 3]), u32> = Default::default();
-    for m in instances {
-        for t in &m.triangles {
-            let [a, b, c] = t.vertices.map(|v| key(m.positions[v as usize]));
-            for (p, q) in [(a, b), (b, c), (c, a)] {
-                *edges.entry(if p < q { (p, q) } else { (q, p) }).or_default() += 1;
-            }
-        }
-    }
-    edges.values().all(|n| n % 2 == 0)
-}
-
 pub(super) fn is_valid_triangle(c: &[Vec3; 3]) -> bool {
     let area2 = (c[1] - c[0]).cross(c[2] - c[0]).length_squared();
     c.iter().all(|v| v.is_finite()) && area2 > 0.0 && area2.is_finite()
