@@ -124,15 +124,27 @@ def repository_binaries():
     return [root / "target" / kind / "caustic" for kind in ("release", "debug")]
 
 
+def bundled_binary():
+    """The `caustic` program the installed zip carries (`bin/caustic`, tools/build_addon.py), made
+    executable where unpacking lost its mode; None where the add-on carries none."""
+    path = pathlib.Path(__file__).resolve().parent / "bin" / "caustic"
+    if not path.is_file():
+        return None
+    if not os.access(path, os.X_OK):
+        path.chmod(path.stat().st_mode | 0o755)
+    return str(path)
+
+
 def find_binary(preferences_path):
-    """The `caustic` program to run: the preference if set, else on PATH, else built in the
-    repository. Returns (path, None) or (None, what went wrong)."""
+    """The `caustic` program to run: the preference if set, else the one the add-on carries, else
+    on PATH, else built in the repository. Returns (path, None) or (None, what went wrong)."""
     if preferences_path:
         path = bpy.path.abspath(preferences_path)
         if os.path.isfile(path) and os.access(path, os.X_OK):
             return path, None
         return None, f"the caustic program set in the add-on's preferences is not an executable file: {path}"
-    found = shutil.which("caustic") or next((str(p) for p in repository_binaries() if p.is_file()), None)
+    found = (bundled_binary() or shutil.which("caustic")
+             or next((str(p) for p in repository_binaries() if p.is_file()), None))
     if found:
         return found, None
     return None, ("cannot find the caustic program: put it on PATH, build it with `cargo build --release`, "
