@@ -19,7 +19,7 @@ import bpy  # noqa: E402
 
 from . import engine, properties, ui  # noqa: E402
 from .export import CAUSTIC_OT_export_scene  # noqa: E402
-from .export import glTF2ExportUserExtension  # noqa: E402,F401 - found here by Blender's glTF exporter
+from .extras import glTF2ExportUserExtension  # noqa: E402,F401 - found here by Blender's glTF exporter
 
 
 def register():

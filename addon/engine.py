@@ -12,7 +12,7 @@ import tempfile
 
 import bpy
 
-from . import export
+from . import export, extras, unrendered
 from .process import RenderProcess
 from .properties import compositor_denoises, find_binary
 
@@ -40,10 +40,10 @@ def render_flags(scene):
         flags += ["--alpha", repr(settings.alpha)]
     if settings.denoise:
         flags.append("--denoising-passes")
-    region = export.render_region(scene)
+    region = extras.render_region(scene)
     if region is not None:
         x, y, width, height = region
-        top = export.resolution(scene)[1] - (y + height)
+        top = extras.resolution(scene)[1] - (y + height)
         flags += ["--crop", f"{x},{top},{width},{height}"]
     if settings.use_time_budget:
         flags += ["--time-budget", repr(settings.time_budget)]
@@ -207,7 +207,7 @@ class CausticRenderEngine(bpy.types.RenderEngine):
         scene = depsgraph.scene
         session = session_for(self, scene)
         if session.written == {} and scene.frame_current == session.frames[0]:
-            for warning in export.scene_warnings(depsgraph):
+            for warning in unrendered.scene_warnings(depsgraph):
                 self.report({'WARNING'}, f"Caustic: {warning}")
             if scene.caustic.denoise and not compositor_denoises(scene):
                 self.report({'WARNING'}, "Caustic: Denoise is on, but the scene's compositor has no Denoise node "
@@ -225,8 +225,8 @@ class CausticRenderEngine(bpy.types.RenderEngine):
         """Puts the frame's EXR (Combined and Error) into the render result: the whole image, or
         the render region's window (Blender's result is then the region's, which Blender places
         in the image unless it is cropped to it)."""
-        region = export.render_region(scene)
-        width, height = export.resolution(scene) if region is None else region[2:]
+        region = extras.render_region(scene)
+        width, height = extras.resolution(scene) if region is None else region[2:]
         self.add_pass("Error", 1, "Y")
         if scene.caustic.denoise:
             for name, channels, _ in DENOISING_PASSES:

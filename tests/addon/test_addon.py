@@ -194,7 +194,7 @@ class StillRenders(unittest.TestCase):
         whole = render_still("region_whole")
         r = scene.render
         r.use_border, r.border_min_x, r.border_max_x, r.border_min_y, r.border_max_y = True, 0.25, 0.75, 0.5, 1.0
-        x, y, width, height = sys.modules["caustic.export"].render_region(scene)
+        x, y, width, height = sys.modules["caustic.extras"].render_region(scene)
         self.assertEqual((x, y, width, height), (16, 24, 32, 24))
         try:
             r.use_crop_to_border = True
@@ -514,7 +514,7 @@ class Export(unittest.TestCase):
         path.parent.mkdir()
         try:
             sys.modules["caustic.export"].export(scene, path)
-            warnings = sys.modules["caustic.export"].scene_warnings(bpy.context.evaluated_depsgraph_get())
+            warnings = sys.modules["caustic.unrendered"].scene_warnings(bpy.context.evaluated_depsgraph_get())
         finally:
             scene.world = None
         gltf = json.loads(path.read_text())
@@ -547,7 +547,7 @@ class Export(unittest.TestCase):
         area.spread = math.radians(0.5)
         scene.camera.data.type, scene.camera.data.panorama_type = 'PANO', 'FISHEYE_EQUISOLID'
         try:
-            warnings = sys.modules["caustic.export"].scene_warnings(bpy.context.evaluated_depsgraph_get())
+            warnings = sys.modules["caustic.unrendered"].scene_warnings(bpy.context.evaluated_depsgraph_get())
         finally:
             area.spread, scene.camera.data.type = math.pi, 'PERSP'
         self.assertIn("light 'Area': a Spread under 1 degree is rendered as 1 degree", warnings)
@@ -621,7 +621,7 @@ class Export(unittest.TestCase):
         sys.modules["caustic.export"].export(scene, path)
         self.assertTrue(path.exists())
         self.assertEqual([n.type for n in group.nodes], [])
-        warnings = sys.modules["caustic.export"].scene_warnings(bpy.context.evaluated_depsgraph_get())
+        warnings = sys.modules["caustic.unrendered"].scene_warnings(bpy.context.evaluated_depsgraph_get())
         self.assertTrue(any("node group 'No output' has no Group Output" in w for w in warnings), warnings)
 
     def test_procedural_inputs_are_baked_and_other_surfaces_named(self):
@@ -637,7 +637,7 @@ class Export(unittest.TestCase):
         mixed = bpy.data.materials["Glass"]
         mix = mixed.node_tree.nodes.new("ShaderNodeMixShader")
         mixed.node_tree.links.new(mix.outputs[0], mixed.node_tree.nodes["Material Output"].inputs["Surface"])
-        warnings = sys.modules["caustic.export"].scene_warnings(bpy.context.evaluated_depsgraph_get())
+        warnings = sys.modules["caustic.unrendered"].scene_warnings(bpy.context.evaluated_depsgraph_get())
         self.assertIn("material 'Floor': its Base Color comes through nodes glTF cannot hold (Checker Texture, "
                       "Color Ramp); Blender bakes it into an image (Render Properties > Caustic > Bake Size)",
                       warnings)
@@ -688,7 +688,7 @@ class Export(unittest.TestCase):
                      '    group_output_node = [...][0]\n'
                      'IndexError: list index out of range\n'
                      'Location: /x/bpy/ops.py:109')
-        message = sys.modules["caustic.export"].exporter_failure(RuntimeError(traceback))
+        message = sys.modules["caustic.workarounds"].exporter_failure(RuntimeError(traceback))
         self.assertIn(f"Blender {bpy.app.version_string}'s glTF exporter failed in "
                       "blender/exp/material/search_node_tree.py:85: IndexError: list index out of range", message)
 
@@ -744,7 +744,7 @@ class World(unittest.TestCase):
         img.filepath = str(OUT / "no-such-folder" / "sky.hdr")
         img.source = 'FILE'
         environment_world(img)
-        warnings = sys.modules["caustic.export"].scene_warnings(bpy.context.evaluated_depsgraph_get())
+        warnings = sys.modules["caustic.unrendered"].scene_warnings(bpy.context.evaluated_depsgraph_get())
         self.assertTrue(any("'lost-sky'" in w and "no-such-folder/sky.hdr" in w and "magenta" in w
                             for w in warnings), warnings)
         for light in [obj for obj in scene.objects if obj.type == 'LIGHT']:
@@ -779,7 +779,7 @@ class World(unittest.TestCase):
     def test_a_baked_world_is_baked_again_only_when_it_changes(self):
         """A Sky Texture's bake is kept: exporting again reuses it (the same bytes, no second
         Blender), until the sun moves."""
-        export = sys.modules["caustic.export"]
+        worlds = sys.modules["caustic.world"]
         scene = glass_sphere_scene()
         world = bpy.data.worlds.new("Cached sky")
         sky = world.node_tree.nodes.new("ShaderNodeTexSky")
@@ -788,23 +788,23 @@ class World(unittest.TestCase):
         folders = [OUT / f"cached-{i}" for i in range(2)]
         for folder in folders:
             folder.mkdir()
-        export.bake_world(world, folders[0], width=64)
-        cached = export.WORLD_CACHE / f"{export.world_fingerprint(world, 64)}.exr"
+        worlds.bake_world(world, folders[0], width=64)
+        cached = worlds.WORLD_CACHE / f"{worlds.world_fingerprint(world, 64)}.exr"
         self.assertTrue(cached.exists())
         # Marked, the kept bake shows where the next export's image comes from.
         cached.write_bytes(cached.read_bytes() + b"kept")
-        export.bake_world(world, folders[1], width=64)
+        worlds.bake_world(world, folders[1], width=64)
         self.assertTrue((folders[1] / "world.exr").read_bytes().endswith(b"kept"))
         cached.unlink()
-        before = export.world_fingerprint(world, 64)
+        before = worlds.world_fingerprint(world, 64)
         sky.sun_elevation += 0.1
-        self.assertNotEqual(export.world_fingerprint(world, 64), before)
+        self.assertNotEqual(worlds.world_fingerprint(world, 64), before)
         world.node_tree.nodes["Background"].inputs["Strength"].default_value = 3.0
         sky.sun_elevation -= 0.1
-        self.assertNotEqual(export.world_fingerprint(world, 64), before)
+        self.assertNotEqual(worlds.world_fingerprint(world, 64), before)
         world.node_tree.nodes["Background"].location = (500.0, 0.0)
         world.node_tree.nodes["Background"].inputs["Strength"].default_value = 1.0
-        self.assertEqual(export.world_fingerprint(world, 64), before, "moving a node changes no bake")
+        self.assertEqual(worlds.world_fingerprint(world, 64), before, "moving a node changes no bake")
 
 
 if __name__ == "__main__":

@@ -356,13 +356,13 @@ def exr_pixels(path):
 
 def check(seed):
     """Builds, exports and renders scene `seed`; returns the reason it failed, or None."""
-    export = sys.modules["caustic.export"]
+    export, unrendered = sys.modules["caustic.export"], sys.modules["caustic.unrendered"]
     holds = build(seed)
     folder = OUT / f"seed-{seed}"
     folder.mkdir()
     path = folder / "scene.gltf"
     try:
-        export.scene_warnings(bpy.context.evaluated_depsgraph_get())
+        unrendered.scene_warnings(bpy.context.evaluated_depsgraph_get())
         export.export(bpy.context.scene, path)
     except Exception as error:  # noqa: BLE001 - every failure is a finding
         return f"export raised {type(error).__name__}: {error} ({holds})"
