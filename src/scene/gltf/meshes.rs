@@ -66,15 +66,29 @@ pub(super) fn optional_attribute<T: Default + Clone>(
     mesh: &str,
     warnings: &mut Vec<String>,
 ) -> Vec<T> {
-    if values.is_empty() || values.len() == count {
+    if values.is_empty() {
         return values;
     }
+    one_per_position(values, count, attribute, mesh, warnings).unwrap_or_default()
+}
+
+/// `values` when it has `count` entries (one per position); otherwise `None`, with a warning.
+fn one_per_position<T>(
+    values: Vec<T>,
+    count: usize,
+    attribute: &str,
+    mesh: &str,
+    warnings: &mut Vec<String>,
+) -> Option<Vec<T>> {
+    if values.len() == count {
+        return Some(values);
+    }
     warnings.push(mismatch(values.len(), count, attribute, mesh));
-    Vec::new()
+    None
 }
 
 /// The warning for an attribute of `len` entries on a mesh of `count` positions.
-pub(super) fn mismatch(len: usize, count: usize, attribute: &str, mesh: &str) -> String {
+fn mismatch(len: usize, count: usize, attribute: &str, mesh: &str) -> String {
     format!("mesh '{mesh}': {attribute} has {len} entries for {count} positions; ignored")
 }
 
@@ -101,11 +115,7 @@ pub(super) fn matching_attribute<T: Default + Clone>(
     mesh: &str,
     warnings: &mut Vec<String>,
 ) -> Vec<T> {
-    if values.len() == count {
-        return values;
-    }
-    warnings.push(mismatch(values.len(), count, attribute, mesh));
-    vec![T::default(); count]
+    one_per_position(values, count, attribute, mesh, warnings).unwrap_or_else(|| vec![T::default(); count])
 }
 
 pub(super) fn is_valid_triangle(c: &[Vec3; 3]) -> bool {
