@@ -35,7 +35,8 @@ def bake_one(scene, obj, material, job):
     """Bakes `job["input"]` of `material` on `obj` into `job["out"]`."""
     tree = material.node_tree
     nodes, links = tree.nodes, tree.links
-    if job["input"] != "Normal":
+    normal = job["input"] == "Normal"
+    if not normal:
         principled = next(n for n in nodes if n.type == 'BSDF_PRINCIPLED')
         output = next(n for n in nodes if n.type == 'OUTPUT_MATERIAL' and n.is_active_output)
         source = principled.inputs[job["input"]].links[0].from_socket
@@ -51,7 +52,7 @@ def bake_one(scene, obj, material, job):
     for other in scene.objects:
         other.select_set(other == obj)
     bpy.context.view_layer.objects.active = obj
-    if job["input"] == "Normal":
+    if normal:
         bpy.ops.object.bake(type='NORMAL', normal_space='TANGENT', margin=4)
     else:
         bpy.ops.object.bake(type='EMIT', margin=4)
