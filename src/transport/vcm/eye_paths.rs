@@ -50,12 +50,9 @@ const ROULETTE_AFTER: u32 = 3;
 /// lights, so what the path finds further on (connections and next-event estimation at later
 /// vertices, emission it meets) shares that light with merging, so going on one time in four
 /// adds little variance (5-12% more error at equal passes), while going on always costs a
-/// quarter to a half of a pass: several rays at each vertex. Relative MSE times render
-/// time at equal passes (2026-11-29, 256x192, 2 threads, seed 1), against going on always:
-/// 12% lower on the caustic box (48 passes), 18% on the diffuse box (400), 7% on the glossy
-/// interior, 23% on the many-light room, 33% on the sunlit room and 36% on the glass in the
-/// hall (32 passes each); a half was as good or a little worse. The weights leave it out, as
-/// they leave out Russian roulette.
+/// quarter to a half of a pass: several rays at each vertex. It lowered relative MSE times
+/// render time on every scene measured (docs/vcm.md); a half was as good or a little worse. The
+/// weights leave it out, as they leave out Russian roulette.
 const PAST_GATHER: f32 = 0.25;
 
 /// The branches a camera path splits into at its first glossy vertex.

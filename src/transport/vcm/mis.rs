@@ -33,14 +33,10 @@
 //! find a caustic's dense photons a bounce away (the caustic box's ceiling, lit by the caustic
 //! under its ball): a whole disc of photons at once, which weights made of densities per path do
 //! not see as the jackpot it is: the caustic box's worst 1% of pixels held 62% of its error at
-//! 10 CPU s. Against merging at every vertex, VCM's relative MSE at equal CPU time (one run each,
-//! 2026-11-28, 256x192, 2 threads, the same seed): on the caustic box 2.2x lower at 10 s, 1.35x at
-//! 100 s, 1.1x at 600 s; on the glossy interior 1.4x lower at 10 s; on the many-light room 1.3x;
-//! on the glossy studio's gold sphere 5% at 10 and 60 s; on the diffuse box the same at 10 s and
-//! 3-12% higher from 30 s on (it loses merges at later bounces, whose light connections find
-//! nearly as well), for 40% more passes in the time (a merge per path, not one per vertex).
-//! Stopping at the first vertex that is not a delta instead (a metal included) made the gold
-//! sphere 5x worse: its reflection of the floor lost merging.
+//! 10 CPU s. Stopping where SPPM gathers lowers the error at equal time on every scene measured
+//! but the diffuse box, where it is about even (docs/vcm.md has the figures). Stopping at the
+//! first vertex that is not a delta instead (a metal included) made the gold sphere 5x worse: its
+//! reflection of the floor lost merging.
 //!
 //! Densities are of the hero wavelength's BSDF (every technique uses the same ones, so the
 //! weights of a path still sum to one), and leave Russian roulette out (every technique leaves it
@@ -52,12 +48,8 @@
 /// (the biweight, as SPPM's gather) has 1.8x the variance of a uniform disc's, and the light
 /// vertices of a pass are shared by every pixel's merges. Any share keeps the weights of a path
 /// summing to one; a quarter moved weight toward connections and path tracing where they do well
-/// and measured best. Relative MSE at equal CPU time against all of it, one run each
-/// (2026-11-27, both with VCM's alpha of 0.8): 7% and 11% lower on the diffuse box at 10 and 100
-/// CPU s, 6% and 16% lower on the caustic box, 36% lower on the glossy studio's gold sphere at
-/// 60 s. A half and an eighth were between; a tenth was worse than all of it on the diffuse box.
-/// On the gold sphere alone (12 seeds each, 2026-11-28), an eighth was 8% lower at 10 CPU s and
-/// the same at 60 s.
+/// and measured best on the diffuse box, the caustic box and the glossy studio, a half and an
+/// eighth between (docs/vcm.md has the figures).
 const MERGE_SHARE: f32 = 0.25;
 
 /// The heuristic: the power heuristic's square.
