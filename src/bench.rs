@@ -8,7 +8,7 @@ use std::time::Instant;
 use crate::film::{Film, FilmMode};
 use crate::memory;
 use crate::render::{
-    self, add_estimates, load_description, PhotonSampling, RenderReport, RenderSettings, Shot,
+    self, add_estimates, load_description, Method, PhotonSampling, RenderReport, RenderSettings, Shot,
 };
 use crate::transport::{PassStats, Renderer};
 use rayon::prelude::*;
@@ -19,12 +19,12 @@ fn rays(stats: PassStats) -> u64 {
 }
 
 /// Renders `frames` of `scene` (at `resolution`, else the scene's) with and without reuse across
-/// frames, `passes` passes each, and prints wall time, rays per frame and peak memory for both,
+/// frames, `passes` passes each by `method`, and prints wall time, rays per frame and peak memory for both,
 /// and the speed-up.
 pub fn run_frames(
     scene: &Path,
     frames: Vec<i32>,
-    passes: u64,
+    (passes, method): (u64, Method),
     resolution: Option<[u32; 2]>,
 ) -> Result<(), String> {
     let out = std::env::temp_dir().join(format!("caustic-bench-{}", std::process::id()));
@@ -32,6 +32,7 @@ pub fn run_frames(
     settings.resolution = resolution;
     settings.frames = frames;
     settings.passes = Some(passes);
+    settings.method = method;
     let count = settings.frames.len() as f64;
     let mut seconds = Vec::new();
     for reuse in [true, false] {
@@ -97,12 +98,13 @@ pub fn run(
     resolution: [u32; 2],
     passes: std::ops::Range<u64>,
     photons: Option<usize>,
-    photon_sampling: PhotonSampling,
+    (photon_sampling, method): (PhotonSampling, Method),
 ) -> Result<(), String> {
     let mut settings = RenderSettings::new(scene_path, Path::new("renders"));
     settings.resolution = Some(resolution);
     settings.photons = photons;
     settings.photon_sampling = photon_sampling;
+    settings.method = method;
     let description = load_description(&settings)?;
     let start = Instant::now();
     let shot = Shot::new(&settings, std::sync::Arc::new(description))?;

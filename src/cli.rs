@@ -231,6 +231,9 @@ pub struct BenchArgs {
     /// How photon paths are drawn (as `caustic render --photon-sampling`).
     #[arg(long, value_enum, default_value_t = PhotonSampling::Uniform)]
     photon_sampling: PhotonSampling,
+    /// How a pass combines camera and light paths (as `caustic render --method`).
+    #[arg(long, value_enum, default_value_t = Method::default())]
+    method: Method,
     /// Instead, render these frames with and without reuse across frames at equal passes (at the
     /// scene's resolution) and compare time, rays per frame and peak memory.
     #[arg(long, value_name = "SPEC", value_parser = parse_frames)]
@@ -443,7 +446,9 @@ pub fn run(cli: Cli) -> Result<(), String> {
         Command::Bench(args) => {
             let scene = args.scene.unwrap_or_else(|| PathBuf::from(DEMO_SCENE));
             match args.frames {
-                Some(frames) => crate::bench::run_frames(&scene, frames.0, args.passes, args.resolution),
+                Some(frames) => {
+                    crate::bench::run_frames(&scene, frames.0, (args.passes, args.method), args.resolution)
+                }
                 None => {
                     let photons = args.photons.map(|n| n as usize);
                     crate::bench::run(
@@ -451,7 +456,7 @@ pub fn run(cli: Cli) -> Result<(), String> {
                         args.resolution.unwrap_or(BENCH_RESOLUTION),
                         args.first_pass..args.first_pass + args.passes,
                         photons,
-                        args.photon_sampling,
+                        (args.photon_sampling, args.method),
                     )
                 }
             }

@@ -7,7 +7,7 @@ use crate::materials::{Material, Volume};
 use crate::render::{is_animated, load_description, motion_spans, shutter, RenderSettings, Shot};
 use crate::scene::description::Description;
 use crate::spectrum::Wavelengths;
-use crate::transport::{Renderer, AUTO_VISIBLE_BELOW};
+use crate::transport::{Method, Renderer, AUTO_VISIBLE_BELOW};
 
 /// The lights (by node), materials and camera whose values are animated, with what is animated.
 fn animated_values(description: &Description) -> Value {
@@ -88,9 +88,12 @@ pub fn report(settings: &RenderSettings) -> Result<Value, String> {
         "per_time_scene": prepared.has_motion(),
         "reuse_possible": reuse,
     });
+    let eye_paths_shared = reuse && !prepared.camera_moves() && !prepared.lights_move();
+    // VCM shares its light paths only with its camera paths (light tracing joins them).
+    let light_paths_shared = reuse && (settings.method == Method::Sppm || eye_paths_shared);
     let reuse_shares = json!({
-        "photon_paths": reuse,
-        "eye_paths": reuse && !prepared.camera_moves() && !prepared.lights_move(),
+        "photon_paths": light_paths_shared,
+        "eye_paths": eye_paths_shared,
     });
     let mut skipped = Vec::new();
     if !prepared.has_motion() {

@@ -2,14 +2,16 @@
 //! static geometry, and must render what each frame rendered alone renders.
 //!
 //! A frame in a block gets exactly the paths it would trace alone (the shared ones where nothing
-//! moving blocks them, the rest resumed from the blocked segment with the same random numbers),
-//! so a block and `--no-reuse` agree pixel for pixel up to float rounding: the photon sums are
-//! added in another order. Tolerance: 1e-4 relative (+ 1e-6 absolute), far below the noise.
+//! moving blocks them, the rest traced again, or resumed from the blocked segment, with the same
+//! random numbers), so a block and `--no-reuse` agree pixel for pixel up to float rounding, by
+//! either method: the sums are added in another order. Tolerance: 1e-4 relative (+ 1e-6
+//! absolute), far below the noise.
 
 mod common;
 
 use caustic::render::{self, RenderReport, RenderSettings};
 use caustic::scene::Scene;
+use caustic::transport::Method;
 use common::*;
 use glam::{Vec2, Vec3};
 use serde_json::json;
@@ -35,36 +37,46 @@ fn assert_same_up_to_rounding(a: &Image, b: &Image, what: &str) {
     assert!(worst <= 1.0, "{what}: differs by {worst:.1} times the rounding tolerance");
 }
 
-/// Renders `scene`'s `frames` with reuse and with `--no-reuse` for several seeds, and compares
-/// every frame; returns the reuse run's block length.
-fn assert_reuse_renders_each_frame_alone(scene: &Path, frames: &[i32], resolution: [u32; 2]) -> usize {
+/// How the reuse runs of [`assert_reuse_renders_each_frame_alone`] rendered.
+struct Reuse {
+    /// Frames rendered together (the same for both methods).
+    block: usize,
+    /// Every run, by both methods, traced camera paths once for all the frames of a block.
+    shares_camera_paths: bool,
+}
+
+/// Renders `scene`'s `frames` with reuse and with `--no-reuse` for several seeds, by both
+/// methods, and compares every frame.
+fn assert_reuse_renders_each_frame_alone(scene: &Path, frames: &[i32], resolution: [u32; 2]) -> Reuse {
     let dir = tempfile::tempdir().unwrap();
-    let mut block = 0;
-    for seed in [1, 2, 3] {
-        let mut shared = settings(scene, &dir.path().join(format!("shared{seed}")), 6);
+    let (mut blocks, mut shares_camera_paths) = (Vec::new(), true);
+    for (method, seed) in [Method::Sppm, Method::Vcm].into_iter().flat_map(|m| [(m, 1), (m, 2), (m, 3)]) {
+        let name = format!("{}{seed}", method.flag());
+        let mut shared = settings(scene, &dir.path().join(format!("shared_{name}")), 6);
         shared.frames = frames.to_vec();
         shared.resolution = Some(resolution);
         shared.photons = Some(4000);
         shared.seed = seed;
-        let alone = RenderSettings {
-            reuse: false,
-            out_dir: dir.path().join(format!("alone{seed}")),
-            ..shared.clone()
-        };
-        block = render_frames(&shared, 2).block_frames;
+        shared.method = method;
+        let alone = RenderSettings { reuse: false, out_dir: dir.path().join(format!("alone_{name}")), ..shared.clone() };
+        let report = render_frames(&shared, 2);
+        blocks.push(report.block_frames);
+        shares_camera_paths &= report.shared_stats.eye_rays > 0;
         assert_eq!(render_frames(&alone, 2).block_frames, 1);
         for &frame in frames {
-            let what = format!("{} frame {frame} seed {seed}", scene.display());
+            let what = format!("{} frame {frame} {name}", scene.display());
             assert_same_up_to_rounding(&frame_image(&shared, frame), &frame_image(&alone, frame), &what);
         }
     }
-    block
+    assert!(blocks.iter().all(|&b| b == blocks[0]), "both methods render the same blocks: {blocks:?}");
+    Reuse { block: blocks[0], shares_camera_paths }
 }
 
 #[test]
 fn a_still_camera_shares_eye_and_photon_paths_and_renders_each_frame_as_alone() {
-    let block = assert_reuse_renders_each_frame_alone(&bundled_scene("shot.gltf"), &[1, 9, 17, 24], [64, 48]);
-    assert_eq!(block, 4, "all four frames render together");
+    let reuse = assert_reuse_renders_each_frame_alone(&bundled_scene("shot.gltf"), &[1, 9, 17, 24], [64, 48]);
+    assert_eq!(reuse.block, 4, "all four frames render together");
+    assert!(reuse.shares_camera_paths, "the camera paths are traced once for the four frames");
 }
 
 #[test]
@@ -131,8 +143,8 @@ fn animated_values_render_each_frame_as_alone() {
     let roughness = format!("/materials/{ball}/pbrMetallicRoughness/roughnessFactor");
     gltf.animate_pointer(&roughness, &times, &keys(&[1.0], &[0.2]), "LINEAR");
     let scene = gltf.write(dir.path(), "animated_values");
-    let block = assert_reuse_renders_each_frame_alone(&scene, &[1, 12, 24], [48, 48]);
-    assert!(block > 1, "the still floor is shared: frames render together");
+    let reuse = assert_reuse_renders_each_frame_alone(&scene, &[1, 12, 24], [48, 48]);
+    assert!(reuse.block > 1, "the still floor is shared: frames render together");
 }
 
 /// A ball moving over a still grid of instanced boxes (`EXT_mesh_gpu_instancing`, two levels):
@@ -155,8 +167,9 @@ fn instanced_meshes_render_each_frame_as_alone() {
     gltf.camera([0.0, 3.0, 4.0], [0.0, -3.0, -4.0], 0.9);
     gltf.scene_extras(json!({"fps": 24.0}));
     let scene = gltf.write(dir.path(), "instanced");
-    let block = assert_reuse_renders_each_frame_alone(&scene, &[1, 12, 24], [48, 48]);
-    assert!(block > 1, "the floor and the boxes are shared: frames render together");
+    let reuse = assert_reuse_renders_each_frame_alone(&scene, &[1, 12, 24], [48, 48]);
+    assert!(reuse.block > 1, "the floor and the boxes are shared: frames render together");
+    assert!(reuse.shares_camera_paths, "the camera paths are traced once for the frames");
 }
 
 /// A skinned square whose morph target weight is animated, over a still lit floor: the square
@@ -166,8 +179,8 @@ fn a_deforming_mesh_renders_each_frame_as_alone() {
     let dir = tempfile::tempdir().unwrap();
     let scene = dir.path().join("deformed.gltf");
     std::fs::write(&scene, deformed_square().to_string()).unwrap();
-    let block = assert_reuse_renders_each_frame_alone(&scene, &[1, 12, 24], [48, 48]);
-    assert!(block > 1, "the still floor is shared: frames render together");
+    let reuse = assert_reuse_renders_each_frame_alone(&scene, &[1, 12, 24], [48, 48]);
+    assert!(reuse.block > 1, "the still floor is shared: frames render together");
 }
 
 /// A floor under a point light, with a red ball that rests at x = -1 until frame 4, rolls to
@@ -199,8 +212,8 @@ fn an_object_moving_mid_range_is_static_before_and_after() {
     let dir = tempfile::tempdir().unwrap();
     let scene = rolling_ball_scene(dir.path());
     let frames: Vec<i32> = (1..=10).collect();
-    let block = assert_reuse_renders_each_frame_alone(&scene, &frames, [48, 48]);
-    assert_eq!(block, 4, "the longest span, frames 1-4, renders together");
+    let reuse = assert_reuse_renders_each_frame_alone(&scene, &frames, [48, 48]);
+    assert_eq!(reuse.block, 4, "the longest span, frames 1-4, renders together");
     let mut s = settings(&scene, &dir.path().join("spans"), 2);
     (s.frames, s.resolution) = (frames, Some([16, 16]));
     let report = render_frames(&s, 2);

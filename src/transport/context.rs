@@ -5,6 +5,7 @@ use glam::Vec3;
 use std::sync::{Arc, Mutex, PoisonError};
 
 use crate::accel::Accel;
+use crate::geometry::ray_meets_box;
 use crate::lights::LightTree;
 use crate::materials::{Bsdf, ShadingFrame};
 use crate::sampling::{pass_sample, Distribution1D};
@@ -204,6 +205,9 @@ pub struct PassStats {
     pub chain_steps_seen: u64,
     /// Segments of shared paths tested against a frame's moving triangles (reuse across frames).
     pub moving_tests: u64,
+    /// Rays of a path traced once for a block of frames that meet the box the frames' moving
+    /// triangles fill (VCM's reuse across frames: each frame traces that path again).
+    pub watched_rays: u64,
     /// Wall-clock nanoseconds of a single-frame pass's stages: eye paths, photon paths, the
     /// photon grid's build, and the gather (zero for passes shared by frames).
     pub stage_ns: [u64; 4],
@@ -229,6 +233,7 @@ impl std::ops::Add for PassStats {
             chain_steps: self.chain_steps + o.chain_steps,
             chain_steps_seen: self.chain_steps_seen + o.chain_steps_seen,
             moving_tests: self.moving_tests + o.moving_tests,
+            watched_rays: self.watched_rays + o.watched_rays,
             stage_ns: std::array::from_fn(|i| self.stage_ns[i] + o.stage_ns[i]),
         }
     }
@@ -293,10 +298,13 @@ pub struct Renderer<'a> {
     pub(super) has_scattering: bool,
     /// The insides the camera and each light are in (none where nothing absorbs).
     start_media: StartMedia,
+    /// The box that moving triangles fill in some frame, where this renderer traces paths that a
+    /// block of frames shares: rays that meet it are counted in [`PassStats::watched_rays`].
+    watched: Option<(Vec3, Vec3)>,
 }
 
 /// The insides paths start in.
-#[derive(Default)]
+#[derive(Default, PartialEq)]
 struct StartMedia {
     /// The camera's (at its lens centre).
     camera: Media,
@@ -350,6 +358,7 @@ impl<'a> Renderer<'a> {
             has_volumes: scene.materials.iter().any(|m| m.volume.is_some()) || scene.fog.is_some(),
             has_scattering: media_scatter(&scene.materials, &scene.fog),
             start_media: StartMedia::default(),
+            watched: None,
         };
         renderer.start_media = StartMedia::of(&renderer);
         renderer
@@ -364,6 +373,24 @@ impl<'a> Renderer<'a> {
     /// This renderer with `settings` instead.
     pub(super) fn with_settings(&self, settings: PassSettings) -> Renderer<'a> {
         Renderer::with_light_choice(self.scene, self.accel, Arc::clone(&self.light_choice), settings)
+    }
+
+    /// This renderer, counting the rays that meet `swept` (the box moving triangles fill).
+    pub(super) fn watching(self, swept: Option<(Vec3, Vec3)>) -> Self {
+        Renderer { watched: swept, ..self }
+    }
+
+    /// Counts the ray from `origin` along `direction` up to `t_max` in `stats` where it meets
+    /// the watched box.
+    pub(super) fn watch(&self, origin: Vec3, direction: Vec3, t_max: f32, stats: &mut PassStats) {
+        if self.watched.is_some_and(|b| ray_meets_box(origin, direction, t_max, b)) {
+            stats.watched_rays += 1;
+        }
+    }
+
+    /// Whether the camera and every light start in the same volumes as `other`'s.
+    pub(super) fn starts_in_same_media(&self, other: &Renderer) -> bool {
+        self.start_media == other.start_media
     }
 
     /// A light for next-event estimation at `p`, of shading normal `n`, with the probability of

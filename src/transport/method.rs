@@ -42,7 +42,7 @@ impl Method {
             },
             Method::Vcm => Capabilities {
                 default_alpha: 0.8,
-                reuses_across_frames: false,
+                reuses_across_frames: true,
                 renders_scattering_media: false,
                 samples_photons_by_visibility: false,
             },

@@ -27,14 +27,14 @@ use glam::Vec3;
 use super::connect::{connect, direct_light};
 use super::finite;
 use super::light_paths::LightVertex;
-use super::merge::{CameraVertex, MergeSet};
+use super::merge::{merge, CameraVertex, MergePoints, MergeSet};
 use super::mis::{emitter_met, MergeVertex, Partials, PassWeights, Scatter};
 use super::view::View;
-use super::LightSubpaths;
+use super::{LightSubpaths, Retraced};
 use crate::geometry::offset_origin;
 use crate::lights::Light;
 use crate::materials::{Bsdf, Material, ShadingFrame, Transport};
-use crate::scene::{Surface, NOT_A_LIGHT};
+use crate::scene::{OpenEdges, Surface, NOT_A_LIGHT};
 use crate::spectrum::{hero_only, SampledSpectrum, LANES};
 use crate::transport::context::{PassSamples, PassStats, PixelEstimate, Renderer, MAX_DEPTH};
 use crate::transport::emission::chunk_of;
@@ -64,8 +64,12 @@ pub struct Lights<'a> {
     pub chunks: &'a [LightSubpaths],
     /// Light paths in all.
     pub paths: usize,
-    /// The light vertices for merging.
-    pub merge_set: &'a MergeSet,
+    /// The light vertices for merging, in one set or more.
+    pub merge_sets: &'a [&'a MergeSet],
+    /// Where the surfaces merged on end.
+    pub open_edges: &'a OpenEdges,
+    /// Paths a frame traced again, in place of the chunks' (reuse across frames).
+    pub retraced: Option<&'a Retraced>,
 }
 
 impl Lights<'_> {
@@ -74,7 +78,11 @@ impl Lights<'_> {
         if self.paths == 0 {
             return &[];
         }
-        let (chunk, k) = chunk_of(pixel % self.paths);
+        let k = pixel % self.paths;
+        if let Some(path) = self.retraced.and_then(|r| r.path(k as u64)) {
+            return path;
+        }
+        let (chunk, k) = chunk_of(k);
         self.chunks[chunk].path(k)
     }
 }
@@ -125,6 +133,14 @@ impl Part {
     }
 }
 
+/// What a camera path finds: its pixel's estimate, and where it merged.
+pub struct Found {
+    /// The pixel's estimate.
+    pub estimate: PixelEstimate,
+    /// The camera vertices it merged at.
+    pub merged_at: MergePoints,
+}
+
 /// Traces pixel `pixel`'s camera path for `pass`.
 pub fn trace_camera_path(
     renderer: &Renderer,
@@ -132,7 +148,7 @@ pub fn trace_camera_path(
     (weights, view): (&PassWeights, &View),
     lights: &Lights,
     pixel: usize,
-) -> (PixelEstimate, PassStats) {
+) -> (Found, PassStats) {
     let (state, mut stats) = start_eye_path(renderer, pass, pixel);
     let partials = Partials::leaving_camera(weights, view.pdf(state.direction.into()), view.traces_lights());
     let mut walk = Walk {
@@ -144,8 +160,9 @@ pub fn trace_camera_path(
         merging: MergeVertex::Ahead,
         part: Part::Unsplit,
     };
-    let mut estimate =
+    let estimate =
         PixelEstimate { radiance: SampledSpectrum::ZERO, laplacian: SampledSpectrum::ZERO, coverage: 1.0 };
+    let mut found = Found { estimate, merged_at: MergePoints::default() };
     let mut branches = Vec::new();
     loop {
         walk_camera_path(
@@ -153,7 +170,7 @@ pub fn trace_camera_path(
             pass,
             (weights, lights, pixel),
             walk,
-            &mut estimate,
+            &mut found,
             &mut stats,
             &mut branches,
         );
@@ -162,20 +179,21 @@ pub fn trace_camera_path(
             None => break,
         }
     }
-    (estimate, stats)
+    (found, stats)
 }
 
-/// Follows `walk` to its end, adding what it finds to `estimate`; the branches it splits off are
+/// Follows `walk` to its end, adding what it finds to `found`; the branches it splits off are
 /// pushed to `branches`, to be followed after it.
 fn walk_camera_path(
     renderer: &Renderer,
     pass: &PassSamples,
     (weights, lights, pixel): (&PassWeights, &Lights, usize),
     mut walk: Walk,
-    estimate: &mut PixelEstimate,
+    found: &mut Found,
     stats: &mut PassStats,
     branches: &mut Vec<Walk>,
 ) {
+    let Found { estimate, merged_at } = found;
     let scene = renderer.scene;
     let lambda = &pass.wavelengths;
     while walk.state.depth < MAX_DEPTH {
@@ -184,6 +202,7 @@ fn walk_camera_path(
         stats.eye_rays += 1;
         let direction = Vec3::from(state.direction);
         let hit = renderer.accel.intersect(state.origin.into(), direction, f32::INFINITY);
+        renderer.watch(state.origin.into(), direction, hit.map_or(f32::INFINITY, |h| h.t), stats);
         if !scene.sphere_lights.is_empty() {
             let segment = (walk.travelled, hit.map_or(f32::INFINITY, |h| h.t));
             estimate.radiance +=
@@ -256,7 +275,8 @@ fn walk_camera_path(
             estimate.radiance +=
                 connect(renderer, pass, weights, at, lights.path_of(pixel), MAX_DEPTH, stats) * scale;
             if walk.merging.merges() {
-                let (merged, merged_laplacian) = lights.merge_set.merge(weights, &camera, MAX_DEPTH);
+                merged_at.note(camera.p);
+                let (merged, merged_laplacian) = merge(lights.merge_sets, lights.open_edges, weights, &camera, MAX_DEPTH);
                 estimate.radiance += merged * scale;
                 estimate.laplacian += merged_laplacian * scale;
             }

@@ -116,11 +116,10 @@ pub fn trace_light_path(
     while walk.rays < MAX_DEPTH {
         walk.rays += 1;
         stats.photon_rays += 1;
-        let Some(hit) =
-            renderer.accel.intersect_opaque(walk.origin.into(), walk.direction.into(), f32::INFINITY)
-        else {
-            break;
-        };
+        let (origin, direction) = (walk.origin.into(), walk.direction.into());
+        let hit = renderer.accel.intersect_opaque(origin, direction, f32::INFINITY);
+        renderer.watch(origin, direction, hit.map_or(f32::INFINITY, |h| h.t), &mut stats);
+        let Some(hit) = hit else { break };
         let surface = scene.surface(&hit, lambda);
         let material = &scene.materials[surface.material as usize];
         let wo = -Vec3::from(walk.direction);

@@ -7,7 +7,6 @@
 use glam::Vec3;
 use rayon::prelude::*;
 use std::f32::consts::FRAC_1_PI;
-use std::sync::Arc;
 
 use super::light_paths::{joined, LightVertex};
 use super::mis::{merging, LightPartials, MergeVertex, Partials, PassWeights};
@@ -52,7 +51,6 @@ pub struct MergeSet {
     positions: Positions,
     grid: PhotonGrid,
     kernel: Kernel,
-    open_edges: Arc<OpenEdges>,
 }
 
 /// A camera vertex merging: where it is, its lobe, its way back, its sums and path so far.
@@ -82,36 +80,33 @@ pub struct CameraVertex<'a> {
 
 impl MergeSet {
     /// The light vertices of `vertices` for merging within `radius`: those a segment or more past
-    /// their light's first vertex (direct light is not merged), in a scene whose surfaces end at
-    /// `open_edges`. Built in parallel, the vertices kept in their order (the same bits with any
+    /// their light's first vertex (direct light is not merged). Built in parallel, the vertices kept in their order (the same bits with any
     /// thread count).
     pub fn new<'a>(
         vertices: impl ParallelIterator<Item = &'a LightVertex>,
         radius: f32,
-        open_edges: &Arc<OpenEdges>,
     ) -> Self {
         let vertices: Vec<&LightVertex> = vertices.filter(|v| v.segments > 1).collect();
         let (grid, sorted, positions) = bucketed(&vertices, radius, |v| v.p, |v| Arrival::of(v));
-        MergeSet { sorted, positions, grid, kernel: Kernel::new(radius), open_edges: Arc::clone(open_edges) }
+        MergeSet { sorted, positions, grid, kernel: Kernel::new(radius) }
     }
 
-    /// The weighted radiance merging finds at `camera` (times its throughput), and the same with
-    /// the kernel's Laplacian, for paths of at most `max_segments`. Light vertices on surfaces
-    /// facing more away than the gather's `EDGE_COSINE` are not merged: they lie on a surface
-    /// meeting the camera vertex's at an edge (a wall, seen from the floor), whose plane cuts
-    /// the disc, or on the other face of a thin one.
-    pub fn merge(
-        &self,
-        weights: &PassWeights,
-        camera: &CameraVertex,
-        max_segments: u32,
-    ) -> (SampledSpectrum, SampledSpectrum) {
-        let (mut sum, mut laplacian) = (SampledSpectrum::ZERO, SampledSpectrum::ZERO);
+    /// Whether a light vertex lies within the radius of `p` (where merging at `p` would read
+    /// it).
+    pub fn reaches(&self, p: Vec3) -> bool {
+        let mut found = false;
+        self.grid.for_each_near(p, |range| {
+            self.positions.for_each_within(range, p, self.kernel.r2, |_, _| found = true);
+        });
+        found
+    }
+
+    /// Adds what merging finds at `camera` among this set's light vertices to `found`.
+    fn gather(&self, weights: &PassWeights, camera: &CameraVertex, max_segments: u32, found: &mut Merged) {
         let ng = camera.frame.ng();
         let front = if ng.dot(camera.wo) < 0.0 { -ng } else { ng };
         let shading = Shading::of(camera);
         let r2 = self.kernel.r2;
-        let mut walls = [Wall::default(); 3];
         self.grid.for_each_near(camera.p, |range| {
             self.positions.for_each_within(range, camera.p, r2, |i, d2| {
                 let light = &self.sorted[i];
@@ -119,7 +114,7 @@ impl MergeSet {
                 if facing < EDGE_COSINE {
                     if facing > -EDGE_COSINE {
                         let wall = self.kernel.wall(light.ng, self.positions.at(i), camera.p, ng);
-                        Wall::keep_widest(&mut walls, wall, light.ng);
+                        Wall::keep_widest(&mut found.walls, wall, light.ng);
                     }
                     return;
                 }
@@ -139,16 +134,78 @@ impl MergeSet {
                     return;
                 }
                 let t2 = d2 / r2;
-                sum += value * ((1.0 - t2) * (1.0 - t2));
-                laplacian += value * (1.0 - 2.0 * t2);
+                found.sum += value * ((1.0 - t2) * (1.0 - t2));
+                found.laplacian += value * (1.0 - 2.0 * t2);
             });
         });
-        let per_path = 1.0 / weights.light_paths;
-        if sum != SampledSpectrum::ZERO {
-            let cut = Wall::cut(&walls).max(self.kernel.open_edge_cut(&self.open_edges, camera.p, ng));
-            sum /= kernel_mass_within(cut);
+    }
+}
+
+/// What merging at a camera vertex has found so far: the kernel-weighted sum, the same with the
+/// kernel's Laplacian, and the walls that cut the disc.
+#[derive(Default)]
+struct Merged {
+    sum: SampledSpectrum,
+    laplacian: SampledSpectrum,
+    walls: [Wall; 3],
+}
+
+/// The weighted radiance merging finds at `camera` (times its throughput) among the light
+/// vertices of `sets` (one pass's, all of the same radius) in a scene whose surfaces end at
+/// `open_edges`, and the same with the kernel's Laplacian, for paths of at most `max_segments`. Light vertices on surfaces facing more away
+/// than the gather's `EDGE_COSINE` are not merged: they lie on a surface meeting the camera
+/// vertex's at an edge (a wall, seen from the floor), whose plane cuts the disc, or on the other
+/// face of a thin one.
+pub fn merge(
+    sets: &[&MergeSet],
+    open_edges: &OpenEdges,
+    weights: &PassWeights,
+    camera: &CameraVertex,
+    max_segments: u32,
+) -> (SampledSpectrum, SampledSpectrum) {
+    let Some(first) = sets.first() else { return (SampledSpectrum::ZERO, SampledSpectrum::ZERO) };
+    let mut found = Merged::default();
+    for set in sets {
+        set.gather(weights, camera, max_segments, &mut found);
+    }
+    let Merged { mut sum, laplacian, walls } = found;
+    let kernel = &first.kernel;
+    let per_path = 1.0 / weights.light_paths;
+    if sum != SampledSpectrum::ZERO {
+        let cut = Wall::cut(&walls).max(kernel.open_edge_cut(open_edges, camera.p, camera.frame.ng()));
+        sum /= kernel_mass_within(cut);
+    }
+    (sum * (kernel.scale * per_path), laplacian * (kernel.laplacian_scale * per_path))
+}
+
+/// Where a camera path merged: up to [`MergePoints::HELD`] points, and whether it merged at more.
+#[derive(Clone, Copy, Default)]
+pub struct MergePoints {
+    points: [Vec3; MergePoints::HELD],
+    count: usize,
+}
+
+impl MergePoints {
+    /// Points held; a path that merges at more is counted as merging anywhere.
+    const HELD: usize = 4;
+
+    /// Notes a merge at `p`.
+    pub fn note(&mut self, p: Vec3) {
+        if let Some(slot) = self.points.get_mut(self.count) {
+            *slot = p;
         }
-        (sum * (self.kernel.scale * per_path), laplacian * (self.kernel.laplacian_scale * per_path))
+        self.count += 1;
+    }
+
+    /// Whether merging at these points may read a vertex of `set`.
+    pub fn may_read(&self, set: &MergeSet) -> bool {
+        self.count > Self::HELD || self.points[..self.count].iter().any(|&p| set.reaches(p))
+    }
+
+    /// Whether a disc of `radius` merged at these points may reach into the box `(lo, hi)`.
+    pub fn may_reach(&self, (lo, hi): (Vec3, Vec3), radius: f32) -> bool {
+        let outside = |p: Vec3| (lo - p).max(p - hi).max(Vec3::ZERO).length();
+        self.count > Self::HELD || self.points[..self.count].iter().any(|&p| outside(p) <= radius)
     }
 }
 

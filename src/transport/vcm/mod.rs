@@ -33,6 +33,7 @@ mod eye_paths;
 mod light_paths;
 mod merge;
 mod mis;
+pub(super) mod reuse;
 mod view;
 
 use rayon::prelude::*;
@@ -69,7 +70,13 @@ fn visibility(
     stats: &mut PassStats,
 ) -> f32 {
     stats.shadow_rays += 1;
-    ShadowRay::leaving(a, (ng, scale), direction, distance).visibility(renderer, &pass.wavelengths)
+    let ray = ShadowRay::leaving(a, (ng, scale), direction, distance);
+    let through = ray.visibility(renderer, &pass.wavelengths);
+    // What static triangles block, they block in every frame.
+    if through > 0.0 {
+        renderer.watch(ray.origin, ray.direction, ray.t_max, stats);
+    }
+    through
 }
 
 /// One chunk of a pass's light subpaths: their vertices path after path, where each path's
@@ -79,6 +86,10 @@ pub struct LightSubpaths {
     vertices: Vec<LightVertex>,
     starts: Vec<usize>,
     splats: Vec<Splat>,
+    /// Where each path's splats start (and one past the last).
+    splat_starts: Vec<usize>,
+    /// The paths (by their place in the chunk) with a ray that met the renderer's watched box.
+    watched: Vec<usize>,
     stats: PassStats,
 }
 
@@ -86,6 +97,68 @@ impl LightSubpaths {
     /// The vertices of the chunk's path `k`.
     pub fn path(&self, k: usize) -> &[LightVertex] {
         &self.vertices[self.starts[k]..self.starts[k + 1]]
+    }
+
+    /// The chunk's paths (by their place in it) with no ray that met the watched box.
+    fn kept_paths(&self) -> impl Iterator<Item = usize> + '_ {
+        (0..self.starts.len().saturating_sub(1)).filter(|k| self.watched.binary_search(k).is_err())
+    }
+
+    /// What the chunk's path `k` adds to the film by light tracing.
+    fn splats_of(&self, k: usize) -> &[Splat] {
+        &self.splats[self.splat_starts[k]..self.splat_starts[k + 1]]
+    }
+
+    /// Traces paths `paths` of `pass` (given in increasing order) into one chunk.
+    fn trace(
+        renderer: &Renderer,
+        pass: &PassSamples,
+        (weights, view): (&PassWeights, &View),
+        paths: impl Iterator<Item = u64>,
+    ) -> Self {
+        let capacity = 2 * paths.size_hint().0;
+        let mut chunk = LightSubpaths { vertices: Vec::with_capacity(capacity), ..LightSubpaths::default() };
+        for (place, k) in paths.enumerate() {
+            chunk.starts.push(chunk.vertices.len());
+            chunk.splat_starts.push(chunk.splats.len());
+            let stats = trace_light_path(renderer, pass, weights, view, k, &mut chunk.vertices, &mut chunk.splats);
+            if stats.watched_rays > 0 {
+                chunk.watched.push(place);
+            }
+            chunk.stats = chunk.stats + stats;
+        }
+        chunk.starts.push(chunk.vertices.len());
+        chunk.splat_starts.push(chunk.splats.len());
+        chunk
+    }
+}
+
+/// The light paths one frame of a block traced again (those whose rays met the box the moving
+/// triangles fill), in place of the paths traced for every frame.
+pub struct Retraced {
+    /// The paths' indices in the pass, increasing.
+    paths: Vec<u64>,
+    /// The paths, [`RETRACED_CHUNK`] to a chunk.
+    chunks: Vec<LightSubpaths>,
+}
+
+/// Paths to a chunk of [`Retraced`] paths.
+const RETRACED_CHUNK: usize = 64;
+
+impl Retraced {
+    /// Traces `paths` of `pass` (increasing) in the frame of `renderer`.
+    fn trace(renderer: &Renderer, pass: &PassSamples, setup: (&PassWeights, &View), paths: Vec<u64>) -> Self {
+        let chunks = paths
+            .par_chunks(RETRACED_CHUNK)
+            .map(|chunk| LightSubpaths::trace(renderer, pass, setup, chunk.iter().copied()))
+            .collect();
+        Retraced { paths, chunks }
+    }
+
+    /// Path `k`'s vertices, where the frame traced it again.
+    fn path(&self, k: u64) -> Option<&[LightVertex]> {
+        let place = self.paths.binary_search(&k).ok()?;
+        Some(self.chunks[place / RETRACED_CHUNK].path(place % RETRACED_CHUNK))
     }
 }
 
@@ -98,11 +171,13 @@ impl Renderer<'_> {
         let view = View::new(self.scene.camera, self.settings.crop);
         let chunks = self.trace_light_subpaths(pass, &weights, &view);
         let vertices = chunks.par_iter().flat_map_iter(|chunk| &chunk.vertices);
-        let merge_set = MergeSet::new(vertices, pass.radius, &self.scene.open_edges);
-        let lights = Lights { chunks: &chunks, paths, merge_set: &merge_set };
+        let merge_set = MergeSet::new(vertices, pass.radius);
+        let open_edges = &self.scene.open_edges;
+        let lights = Lights { chunks: &chunks, paths, merge_sets: &[&merge_set], open_edges, retraced: None };
         let pixels = (self.settings.width * self.settings.height) as usize;
         let (mut estimates, stats) = collect_counting(pixels, |pixel| {
-            trace_camera_path(self, pass, (&weights, &view), &lights, pixel)
+            let (found, stats) = trace_camera_path(self, pass, (&weights, &view), &lights, pixel);
+            (found.estimate, stats)
         });
         for &(pixel, radiance) in chunks.iter().flat_map(|chunk| &chunk.splats) {
             estimates[pixel as usize].radiance += radiance;
@@ -112,34 +187,9 @@ impl Renderer<'_> {
 
     /// The pass's light subpaths, traced in parallel chunks, in path order (kept in their
     /// chunks: joining them would copy every vertex once more).
-    fn trace_light_subpaths(
-        &self,
-        pass: &PassSamples,
-        weights: &PassWeights,
-        view: &View,
-    ) -> Vec<LightSubpaths> {
+    fn trace_light_subpaths(&self, pass: &PassSamples, weights: &PassWeights, view: &View) -> Vec<LightSubpaths> {
         photon_chunks(0..self.settings.photons_per_pass)
-            .map(|range| {
-                let mut chunk = LightSubpaths {
-                    vertices: Vec::with_capacity(2 * (range.end - range.start) as usize),
-                    ..LightSubpaths::default()
-                };
-                for k in range {
-                    chunk.starts.push(chunk.vertices.len());
-                    let stats = trace_light_path(
-                        self,
-                        pass,
-                        weights,
-                        view,
-                        k,
-                        &mut chunk.vertices,
-                        &mut chunk.splats,
-                    );
-                    chunk.stats = chunk.stats + stats;
-                }
-                chunk.starts.push(chunk.vertices.len());
-                chunk
-            })
+            .map(|range| LightSubpaths::trace(self, pass, (weights, view), range))
             .collect()
     }
 }
