@@ -58,7 +58,11 @@ fn assert_reuse_renders_each_frame_alone(scene: &Path, frames: &[i32], resolutio
         shared.photons = Some(4000);
         shared.seed = seed;
         shared.method = method;
-        let alone = RenderSettings { reuse: false, out_dir: dir.path().join(format!("alone_{name}")), ..shared.clone() };
+        let alone = RenderSettings {
+            reuse: false,
+            out_dir: dir.path().join(format!("alone_{name}")),
+            ..shared.clone()
+        };
         let report = render_frames(&shared, 2);
         blocks.push(report.block_frames);
         shares_camera_paths &= report.shared_stats.eye_rays > 0;

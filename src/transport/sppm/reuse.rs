@@ -31,16 +31,16 @@ use std::sync::Arc;
 use glam::Vec3;
 use rayon::prelude::*;
 
-use crate::transport::context::{collect_counting, PassSamples, PassStats, PixelEstimate, Renderer};
-use crate::transport::reuse::{FrameEstimates, SharedPassOutput, Swept};
-use crate::transport::shadow::ShadowRay;
 use super::gather::{sum_over, FirstRound, PhotonSet, PhotonSums};
 use super::photons::{continue_photon, trace_photon, Photon};
 use super::points::{PixelMarks, PointGrid};
 use super::visible::{continue_eye_path, trace_eye_path, with_direct, EyeEnd, EyeEvent, EyeResult};
 use crate::spectrum::SampledSpectrum;
+use crate::transport::context::{collect_counting, PassSamples, PassStats, PixelEstimate, Renderer};
 use crate::transport::emission::{photon_chunks, start_photon, PhotonState};
 use crate::transport::eye::{start_eye_path, EyeState};
+use crate::transport::reuse::{FrameEstimates, SharedPassOutput, Swept};
+use crate::transport::shadow::ShadowRay;
 
 /// A segment of a shared path that meets the swept box.
 struct Watched<S> {

@@ -64,8 +64,9 @@ pub struct Lights<'a> {
     pub chunks: &'a [LightSubpaths],
     /// Light paths in all.
     pub paths: usize,
-    /// The light vertices for merging, in one set or more.
-    pub merge_sets: &'a [&'a MergeSet],
+    /// The light vertices for merging, in one set or more, each without the vertices of the
+    /// paths it lists (increasing).
+    pub merge_sets: &'a [(&'a MergeSet, &'a [u32])],
     /// Where the surfaces merged on end.
     pub open_edges: &'a OpenEdges,
     /// Paths a frame traced again, in place of the chunks' (reuse across frames).
@@ -276,7 +277,8 @@ fn walk_camera_path(
                 connect(renderer, pass, weights, at, lights.path_of(pixel), MAX_DEPTH, stats) * scale;
             if walk.merging.merges() {
                 merged_at.note(camera.p);
-                let (merged, merged_laplacian) = merge(lights.merge_sets, lights.open_edges, weights, &camera, MAX_DEPTH);
+                let (merged, merged_laplacian) =
+                    merge(lights.merge_sets, lights.open_edges, weights, &camera, MAX_DEPTH);
                 estimate.radiance += merged * scale;
                 estimate.laplacian += merged_laplacian * scale;
             }

@@ -27,11 +27,13 @@ struct Arrival {
     hero_only: bool,
     partials: LightPartials,
     segments: u32,
+    /// The index of its path in the pass.
+    path: u32,
 }
 
 impl Arrival {
-    /// What merging reads of light vertex `v`.
-    fn of(v: &LightVertex) -> Self {
+    /// What merging reads of light vertex `v` of path `path`.
+    fn of(path: u32, v: &LightVertex) -> Self {
         let ng = v.lobe.frame.ng();
         Arrival {
             wi: v.wo,
@@ -40,6 +42,7 @@ impl Arrival {
             hero_only: v.hero_only,
             partials: v.partials,
             segments: v.segments,
+            path,
         }
     }
 }
@@ -79,15 +82,14 @@ pub struct CameraVertex<'a> {
 }
 
 impl MergeSet {
-    /// The light vertices of `vertices` for merging within `radius`: those a segment or more past
+    /// The light vertices of `vertices` (each with the index of its path) for merging within
+    /// `radius`: those a segment or more past
     /// their light's first vertex (direct light is not merged). Built in parallel, the vertices kept in their order (the same bits with any
     /// thread count).
-    pub fn new<'a>(
-        vertices: impl ParallelIterator<Item = &'a LightVertex>,
-        radius: f32,
-    ) -> Self {
-        let vertices: Vec<&LightVertex> = vertices.filter(|v| v.segments > 1).collect();
-        let (grid, sorted, positions) = bucketed(&vertices, radius, |v| v.p, |v| Arrival::of(v));
+    pub fn new<'a>(vertices: impl ParallelIterator<Item = (u32, &'a LightVertex)>, radius: f32) -> Self {
+        let vertices: Vec<(u32, &LightVertex)> = vertices.filter(|(_, v)| v.segments > 1).collect();
+        let (grid, sorted, positions) =
+            bucketed(&vertices, radius, |(_, v)| v.p, |&(path, v)| Arrival::of(path, v));
         MergeSet { sorted, positions, grid, kernel: Kernel::new(radius) }
     }
 
@@ -101,8 +103,15 @@ impl MergeSet {
         found
     }
 
-    /// Adds what merging finds at `camera` among this set's light vertices to `found`.
-    fn gather(&self, weights: &PassWeights, camera: &CameraVertex, max_segments: u32, found: &mut Merged) {
+    /// Adds what merging finds at `camera` among this set's light vertices to `found`, leaving
+    /// out those of the paths `excluded` (increasing).
+    fn gather(
+        &self,
+        (weights, excluded): (&PassWeights, &[u32]),
+        camera: &CameraVertex,
+        max_segments: u32,
+        found: &mut Merged,
+    ) {
         let ng = camera.frame.ng();
         let front = if ng.dot(camera.wo) < 0.0 { -ng } else { ng };
         let shading = Shading::of(camera);
@@ -110,6 +119,9 @@ impl MergeSet {
         self.grid.for_each_near(camera.p, |range| {
             self.positions.for_each_within(range, camera.p, r2, |i, d2| {
                 let light = &self.sorted[i];
+                if !excluded.is_empty() && excluded.binary_search(&light.path).is_ok() {
+                    return;
+                }
                 let facing = light.ng.dot(front);
                 if facing < EDGE_COSINE {
                     if facing > -EDGE_COSINE {
@@ -151,22 +163,23 @@ struct Merged {
 }
 
 /// The weighted radiance merging finds at `camera` (times its throughput) among the light
-/// vertices of `sets` (one pass's, all of the same radius) in a scene whose surfaces end at
+/// vertices of `sets` (one pass's, all of the same radius, each without the vertices of the paths
+/// it lists) in a scene whose surfaces end at
 /// `open_edges`, and the same with the kernel's Laplacian, for paths of at most `max_segments`. Light vertices on surfaces facing more away
 /// than the gather's `EDGE_COSINE` are not merged: they lie on a surface meeting the camera
 /// vertex's at an edge (a wall, seen from the floor), whose plane cuts the disc, or on the other
 /// face of a thin one.
 pub fn merge(
-    sets: &[&MergeSet],
+    sets: &[(&MergeSet, &[u32])],
     open_edges: &OpenEdges,
     weights: &PassWeights,
     camera: &CameraVertex,
     max_segments: u32,
 ) -> (SampledSpectrum, SampledSpectrum) {
-    let Some(first) = sets.first() else { return (SampledSpectrum::ZERO, SampledSpectrum::ZERO) };
+    let Some((first, _)) = sets.first() else { return (SampledSpectrum::ZERO, SampledSpectrum::ZERO) };
     let mut found = Merged::default();
-    for set in sets {
-        set.gather(weights, camera, max_segments, &mut found);
+    for (set, excluded) in sets {
+        set.gather((weights, excluded), camera, max_segments, &mut found);
     }
     let Merged { mut sum, laplacian, walls } = found;
     let kernel = &first.kernel;

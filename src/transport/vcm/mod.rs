@@ -88,6 +88,8 @@ pub struct LightSubpaths {
     splats: Vec<Splat>,
     /// Where each path's splats start (and one past the last).
     splat_starts: Vec<usize>,
+    /// The paths' indices in the pass.
+    ids: Vec<u32>,
     /// The paths (by their place in the chunk) with a ray that met the renderer's watched box.
     watched: Vec<usize>,
     stats: PassStats,
@@ -99,9 +101,9 @@ impl LightSubpaths {
         &self.vertices[self.starts[k]..self.starts[k + 1]]
     }
 
-    /// The chunk's paths (by their place in it) with no ray that met the watched box.
-    fn kept_paths(&self) -> impl Iterator<Item = usize> + '_ {
-        (0..self.starts.len().saturating_sub(1)).filter(|k| self.watched.binary_search(k).is_err())
+    /// Every vertex, with the index of its path in the pass.
+    fn vertices_by_path(&self) -> impl Iterator<Item = (u32, &LightVertex)> {
+        self.ids.iter().enumerate().flat_map(move |(k, &id)| self.path(k).iter().map(move |v| (id, v)))
     }
 
     /// What the chunk's path `k` adds to the film by light tracing.
@@ -121,7 +123,9 @@ impl LightSubpaths {
         for (place, k) in paths.enumerate() {
             chunk.starts.push(chunk.vertices.len());
             chunk.splat_starts.push(chunk.splats.len());
-            let stats = trace_light_path(renderer, pass, weights, view, k, &mut chunk.vertices, &mut chunk.splats);
+            chunk.ids.push(k as u32);
+            let stats =
+                trace_light_path(renderer, pass, weights, view, k, &mut chunk.vertices, &mut chunk.splats);
             if stats.watched_rays > 0 {
                 chunk.watched.push(place);
             }
@@ -170,10 +174,11 @@ impl Renderer<'_> {
         let weights = PassWeights::new(pass.radius, paths);
         let view = View::new(self.scene.camera, self.settings.crop);
         let chunks = self.trace_light_subpaths(pass, &weights, &view);
-        let vertices = chunks.par_iter().flat_map_iter(|chunk| &chunk.vertices);
+        let vertices = chunks.par_iter().flat_map_iter(LightSubpaths::vertices_by_path);
         let merge_set = MergeSet::new(vertices, pass.radius);
         let open_edges = &self.scene.open_edges;
-        let lights = Lights { chunks: &chunks, paths, merge_sets: &[&merge_set], open_edges, retraced: None };
+        let lights =
+            Lights { chunks: &chunks, paths, merge_sets: &[(&merge_set, &[])], open_edges, retraced: None };
         let pixels = (self.settings.width * self.settings.height) as usize;
         let (mut estimates, stats) = collect_counting(pixels, |pixel| {
             let (found, stats) = trace_camera_path(self, pass, (&weights, &view), &lights, pixel);
@@ -187,7 +192,12 @@ impl Renderer<'_> {
 
     /// The pass's light subpaths, traced in parallel chunks, in path order (kept in their
     /// chunks: joining them would copy every vertex once more).
-    fn trace_light_subpaths(&self, pass: &PassSamples, weights: &PassWeights, view: &View) -> Vec<LightSubpaths> {
+    fn trace_light_subpaths(
+        &self,
+        pass: &PassSamples,
+        weights: &PassWeights,
+        view: &View,
+    ) -> Vec<LightSubpaths> {
         photon_chunks(0..self.settings.photons_per_pass)
             .map(|range| LightSubpaths::trace(self, pass, (weights, view), range))
             .collect()

@@ -3,15 +3,16 @@
 //! When neither the camera nor a light moves, the pass's light subpaths and camera subpaths are
 //! traced once against the static triangles, and every ray they trace (their segments, the shadow
 //! rays of next-event estimation, of connections and of light tracing) that meets the box the
-//! moving triangles fill in some frame is counted. A light path with no such ray is the same in
-//! every frame: it is traced once, merged from one set of vertices, and its light tracing is in
-//! the common estimate. Each frame traces the other light paths again in its own scene. A pixel
-//! is the same in every frame when its camera path has no such ray, the light path paired with
-//! it is shared, and merging at its vertices reaches none of the frame's own light vertices: its
-//! estimate is the common one (plus the light the frame's own paths trace onto it). A frame
-//! traces the other pixels' camera paths again in its own scene, merging with the shared light
-//! vertices and its own. So every frame gets the paths a render of it alone traces, with the same
-//! random numbers, summed in another order: the images are those of `--no-reuse` up to float
+//! moving triangles fill in some frame is counted. The common estimate of every pixel is made
+//! from these paths, as though no frame's moving triangles were there. Each frame traces again
+//! the light paths with such a ray, in its own scene, with the same random numbers; those that
+//! come out otherwise than traced for every frame are the frame's changed paths. A pixel differs
+//! from the common estimate where its camera path has such a ray, where the light path paired
+//! with it changed, or where merging at its vertices reaches a changed path's vertex as traced
+//! for every frame or as the frame traced it: the frame traces it again in its own scene,
+//! merging with every path's vertices as the frame has them. A pixel that only receives the
+//! light tracing of changed paths trades their splats. So every frame gets the paths a render of
+//! it alone traces, summed in another order: the images are those of `--no-reuse` up to float
 //! rounding.
 //!
 //! Where the surfaces' open edges differ between frames (a moving open mesh), a pixel that merges
@@ -26,13 +27,14 @@ use glam::Vec3;
 use rayon::prelude::*;
 
 use super::eye_paths::{trace_camera_path, Lights};
-use super::light_paths::Splat;
+use super::light_paths::{LightVertex, Splat};
 use super::merge::{MergePoints, MergeSet};
 use super::mis::PassWeights;
 use super::view::View;
 use super::{LightSubpaths, Retraced};
+use crate::spectrum::SampledSpectrum;
 use crate::transport::context::{collect_counting, PassSamples, PassStats, PixelEstimate, Renderer};
-use crate::transport::emission::photon_chunks;
+use crate::transport::emission::chunk_of;
 use crate::transport::reuse::{FrameEstimates, SharedPassOutput, Swept};
 
 /// VCM's pass for a block of frames (see [`crate::transport::run_shared_pass`]).
@@ -76,24 +78,44 @@ struct SharedPaths {
     /// The light paths with a ray that meets the moving triangles' box, increasing: each frame
     /// traces them again.
     watched_paths: Vec<u64>,
-    /// The vertices of the other light paths, for merging.
+    /// Every light path's vertices, for merging.
     merge_set: MergeSet,
-    /// What the other light paths trace onto the film, by pixel (in path order for each pixel).
-    splats: Vec<Splat>,
-    /// Every pixel's estimate from the shared paths.
+    /// What every light path traces onto the film, with its path, by pixel (in path order for
+    /// each pixel).
+    splats: Vec<PathSplat>,
+    /// Every pixel's estimate from the paths traced for every frame.
     common: Vec<PixelEstimate>,
     /// Every pixel's camera path as it bears on the frames.
     pixels: Vec<SharedPixel>,
     stats: PassStats,
 }
 
+/// A light tracing contribution: the pixel, the light path, the radiance.
+type PathSplat = (u32, u32, SampledSpectrum);
+
 /// What a frame must know of a pixel's camera path traced for every frame.
 struct SharedPixel {
-    /// A ray of it meets the moving triangles' box, or its paired light path does: every frame
-    /// traces it again.
+    /// A ray of it meets the moving triangles' box: every frame traces it again.
     watched: bool,
     /// Where it merged.
     merged_at: MergePoints,
+}
+
+/// The light paths one frame changed: its own tracing of them, the vertices of both tracings
+/// bucketed, and their splats by pixel.
+struct Changes {
+    /// Their indices in the pass, increasing.
+    paths: Vec<u32>,
+    /// The frame's tracing of every watched path.
+    retraced: Retraced,
+    /// The vertices of the changed paths as the frame traced them.
+    own: MergeSet,
+    /// Those of them that differ from the tracing for every frame.
+    added: MergeSet,
+    /// The vertices of the changed paths as traced for every frame that differ from the frame's.
+    removed: MergeSet,
+    /// What the changed paths trace onto the film in the frame, by pixel.
+    splats: Vec<PathSplat>,
 }
 
 impl SharedPaths {
@@ -105,81 +127,167 @@ impl SharedPaths {
         let weights = PassWeights::new(pass.radius, paths);
         let view = View::new(watcher.scene.camera, watcher.settings.crop);
         let chunks = watcher.trace_light_subpaths(pass, &weights, &view);
-        let firsts: Vec<u64> = photon_chunks(0..paths).map(|range| range.start).collect();
-        let watched_paths: Vec<u64> = (chunks.iter().zip(&firsts))
-            .flat_map(|(chunk, &first)| chunk.watched.iter().map(move |&place| first + place as u64))
+        let watched_paths: Vec<u64> = (chunks.iter())
+            .flat_map(|chunk| chunk.watched.iter().map(|&place| u64::from(chunk.ids[place])))
             .collect();
-        let kept = chunks.par_iter().flat_map_iter(|chunk| chunk.kept_paths().flat_map(|k| chunk.path(k)));
-        let merge_set = MergeSet::new(kept, pass.radius);
-        let mut splats: Vec<Splat> =
-            chunks.iter().flat_map(|chunk| chunk.kept_paths().flat_map(|k| chunk.splats_of(k))).copied().collect();
-        splats.sort_by_key(|&(pixel, _)| pixel);
+        let merge_set =
+            MergeSet::new(chunks.par_iter().flat_map_iter(LightSubpaths::vertices_by_path), pass.radius);
+        let splats = splats_by_pixel(&chunks);
         let open_edges = &watcher.scene.open_edges;
-        let lights = Lights { chunks: &chunks, paths, merge_sets: &[&merge_set], open_edges, retraced: None };
+        let lights =
+            Lights { chunks: &chunks, paths, merge_sets: &[(&merge_set, &[])], open_edges, retraced: None };
         let pixel_count = (watcher.settings.width * watcher.settings.height) as usize;
         let (traced, camera_stats) = collect_counting(pixel_count, |pixel| {
             let (found, stats) = trace_camera_path(watcher, pass, (&weights, &view), &lights, pixel);
-            let paired = paths > 0 && watched_paths.binary_search(&((pixel % paths) as u64)).is_ok();
             let near_edges = moving_edges.is_some_and(|b| found.merged_at.may_reach(b, pass.radius));
-            let watched = paired || near_edges || stats.watched_rays > 0;
+            let watched = near_edges || stats.watched_rays > 0;
             ((found.estimate, SharedPixel { watched, merged_at: found.merged_at }), stats)
         });
         let (mut common, pixels): (Vec<PixelEstimate>, Vec<SharedPixel>) = traced.into_iter().unzip();
-        for &(pixel, radiance) in &splats {
+        for &(pixel, _, radiance) in &splats {
             common[pixel as usize].radiance += radiance;
         }
         let stats = chunks.iter().fold(camera_stats, |all, chunk| all + chunk.stats);
         SharedPaths { weights, view, chunks, paths, watched_paths, merge_set, splats, common, pixels, stats }
     }
 
+    /// Path `k` as traced for every frame: its vertices and splats.
+    fn shared_path(&self, k: u64) -> (&[LightVertex], &[Splat]) {
+        let (chunk, place) = chunk_of(k as usize);
+        (self.chunks[chunk].path(place), self.chunks[chunk].splats_of(place))
+    }
+
+    /// Traces the watched light paths in `frame`, and finds those it changes.
+    fn changes(&self, frame: &Renderer, pass: &PassSamples) -> Changes {
+        let retraced = Retraced::trace(frame, pass, (&self.weights, &self.view), self.watched_paths.clone());
+        // Each changed path, and the first of its vertices that differs between the tracings.
+        let mut paths = Vec::new();
+        let mut first_changed = Vec::new();
+        for chunk in &retraced.chunks {
+            for (place, &k) in chunk.ids.iter().enumerate() {
+                let ours = (chunk.path(place), chunk.splats_of(place));
+                if let Some(first) = first_difference(ours, self.shared_path(u64::from(k))) {
+                    paths.push(k);
+                    first_changed.push(first);
+                }
+            }
+        }
+        let changed_place = |k: u32| paths.binary_search(&k).ok();
+        let by_path = |chunk: &LightSubpaths| {
+            (chunk.ids.iter().enumerate())
+                .filter_map(|(place, &k)| changed_place(k).map(|c| (place, k, first_changed[c])))
+                .collect::<Vec<_>>()
+        };
+        let own = retraced.chunks.par_iter().flat_map_iter(|chunk| {
+            by_path(chunk)
+                .into_iter()
+                .flat_map(move |(place, k, _)| chunk.path(place).iter().map(move |v| (k, v)))
+        });
+        let own = MergeSet::new(own, pass.radius);
+        let added = retraced.chunks.par_iter().flat_map_iter(|chunk| {
+            by_path(chunk)
+                .into_iter()
+                .flat_map(move |(place, k, first)| chunk.path(place)[first..].iter().map(move |v| (k, v)))
+        });
+        let added = MergeSet::new(added, pass.radius);
+        let removed = (paths.par_iter().zip(&first_changed)).flat_map_iter(|(&k, &first)| {
+            self.shared_path(u64::from(k)).0[first..].iter().map(move |v| (k, v))
+        });
+        let removed = MergeSet::new(removed, pass.radius);
+        let mut splats: Vec<PathSplat> = (retraced.chunks.iter())
+            .flat_map(|chunk| {
+                by_path(chunk).into_iter().flat_map(move |(place, k, _)| {
+                    chunk.splats_of(place).iter().map(move |&(pixel, radiance)| (pixel, k, radiance))
+                })
+            })
+            .collect();
+        splats.sort_by_key(|&(pixel, _, _)| pixel);
+        Changes { paths, retraced, own, added, removed, splats }
+    }
+
     /// `frame`'s estimates where they differ from the common ones, in pixel order, and the work
-    /// it did: it traces the watched light paths again, and the camera paths of the pixels that
-    /// are watched or whose merging reaches its own light vertices.
-    fn frame_estimates(&self, frame: &Renderer, pass: &PassSamples) -> (Vec<(u32, PixelEstimate)>, PassStats) {
+    /// it did.
+    fn frame_estimates(
+        &self,
+        frame: &Renderer,
+        pass: &PassSamples,
+    ) -> (Vec<(u32, PixelEstimate)>, PassStats) {
         let setup = (&self.weights, &self.view);
-        let retraced = Retraced::trace(frame, pass, setup, self.watched_paths.clone());
-        let own = retraced.chunks.par_iter().flat_map_iter(|chunk| &chunk.vertices);
-        let own_set = MergeSet::new(own, pass.radius);
-        let mut own_splats: Vec<Splat> = retraced.chunks.iter().flat_map(|c| &c.splats).copied().collect();
-        own_splats.sort_by_key(|&(pixel, _)| pixel);
+        let changes = self.changes(frame, pass);
+        let changed = |k: u32| changes.paths.binary_search(&k).is_ok();
         let lights = Lights {
             chunks: &self.chunks,
             paths: self.paths,
-            merge_sets: &[&self.merge_set, &own_set],
+            merge_sets: &[(&self.merge_set, &changes.paths), (&changes.own, &[])],
             open_edges: &frame.scene.open_edges,
-            retraced: Some(&retraced),
+            retraced: Some(&changes.retraced),
         };
         let (estimates, stats) = collect_counting(self.pixels.len(), |pixel| {
             let shared = &self.pixels[pixel];
-            let own_light = splats_at(&own_splats, pixel);
-            if shared.watched || shared.merged_at.may_read(&own_set) {
+            let paired = self.paths > 0 && changed((pixel % self.paths) as u32);
+            let merges_changed =
+                shared.merged_at.may_read(&changes.added) || shared.merged_at.may_read(&changes.removed);
+            let (old, new) = (splats_at(&self.splats, pixel), splats_at(&changes.splats, pixel));
+            if shared.watched || paired || merges_changed {
                 let (found, stats) = trace_camera_path(frame, pass, setup, &lights, pixel);
                 let mut estimate = found.estimate;
-                for &(_, radiance) in splats_at(&self.splats, pixel).iter().chain(own_light) {
+                let kept = old.iter().filter(|&&(_, k, _)| !changed(k));
+                for &(_, _, radiance) in kept.chain(new) {
                     estimate.radiance += radiance;
                 }
                 (Some(estimate), stats)
-            } else if !own_light.is_empty() {
+            } else if new.is_empty() && old.iter().all(|&(_, k, _)| !changed(k)) {
+                (None, PassStats::default())
+            } else {
                 let mut estimate = self.common[pixel];
-                for &(_, radiance) in own_light {
+                for &(_, _, radiance) in old.iter().filter(|&&(_, k, _)| changed(k)) {
+                    estimate.radiance -= radiance;
+                }
+                for &(_, _, radiance) in new {
                     estimate.radiance += radiance;
                 }
                 (Some(estimate), PassStats::default())
-            } else {
-                (None, PassStats::default())
             }
         });
         let differing = (estimates.into_iter().enumerate())
             .filter_map(|(pixel, estimate)| estimate.map(|e| (pixel as u32, e)))
             .collect();
-        (differing, retraced.chunks.iter().fold(stats, |all, chunk| all + chunk.stats))
+        (differing, changes.retraced.chunks.iter().fold(stats, |all, chunk| all + chunk.stats))
     }
 }
 
+/// Where two tracings of a light path differ: `None` where they came out the same (the same
+/// vertices, throughputs and splats: the same random numbers gave the same path), else the first
+/// vertex at which they differ (or the number of vertices they share, where only what follows or
+/// their splats differ).
+fn first_difference(
+    (a, a_splats): (&[LightVertex], &[Splat]),
+    (b, b_splats): (&[LightVertex], &[Splat]),
+) -> Option<usize> {
+    let same = |(u, v): (&LightVertex, &LightVertex)| {
+        u.p == v.p && u.throughput == v.throughput && u.segments == v.segments
+    };
+    let shared = a.iter().zip(b).take_while(|&pair| same(pair)).count();
+    (shared < a.len().max(b.len()) || a_splats != b_splats).then_some(shared.min(a.len()).min(b.len()))
+}
+
+/// Every path's splats in `chunks`, with its path, sorted by pixel (in path order for each pixel).
+fn splats_by_pixel(chunks: &[LightSubpaths]) -> Vec<PathSplat> {
+    let mut splats: Vec<PathSplat> = (chunks.iter())
+        .flat_map(|chunk| {
+            chunk.ids.iter().enumerate().flat_map(move |(place, &k)| {
+                chunk.splats_of(place).iter().map(move |&(pixel, radiance)| (pixel, k, radiance))
+            })
+        })
+        .collect();
+    splats.sort_by_key(|&(pixel, _, _)| pixel);
+    splats
+}
+
 /// The splats of `splats` (sorted by pixel) that land on `pixel`.
-fn splats_at(splats: &[Splat], pixel: usize) -> &[Splat] {
+fn splats_at(splats: &[PathSplat], pixel: usize) -> &[PathSplat] {
     let pixel = pixel as u32;
-    let start = splats.partition_point(|&(p, _)| p < pixel);
-    let end = start + splats[start..].partition_point(|&(p, _)| p == pixel);
+    let start = splats.partition_point(|&(p, _, _)| p < pixel);
+    let end = start + splats[start..].partition_point(|&(p, _, _)| p == pixel);
     &splats[start..end]
 }
