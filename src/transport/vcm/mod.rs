@@ -26,7 +26,9 @@
 //! (`lights/sphere.rs`). The camera itself sees the disc, as under SPPM.
 //!
 //! Not yet rendered this way (a scene with them is refused with `--method vcm`): media that
-//! scatter. Reuse across frames does not share VCM paths: each frame renders its own.
+//! scatter.
+//!
+//! The frames of a block share the paths that meet only static triangles (`reuse.rs`).
 
 mod connect;
 mod eye_paths;
