@@ -73,7 +73,7 @@ pub fn run_shared_pass(
     mut consume: impl FnMut(SharedPassOutput),
 ) -> (PassStats, std::time::Duration) {
     match statics.settings.method {
-        Method::Sppm => super::sppm::reuse::run_shared_pass(statics, frames, pass, share_eyes, &mut consume),
-        Method::Vcm => super::vcm::reuse::run_shared_pass(statics, frames, pass, share_eyes, &mut consume),
+        Method::Sppm => statics.run_shared_sppm_pass(frames, pass, share_eyes, &mut consume),
+        Method::Vcm => statics.run_shared_vcm_pass(frames, pass, share_eyes, &mut consume),
     }
 }

@@ -10,5 +10,5 @@ pub(crate) mod pass;
 pub(crate) mod photon_sampling;
 pub(crate) mod photons;
 pub(crate) mod points;
-pub(crate) mod reuse;
+mod reuse;
 pub(crate) mod visible;

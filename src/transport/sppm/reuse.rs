@@ -105,8 +105,22 @@ struct SharedEyes {
     common: Option<(Vec<PixelEstimate>, PointGrid)>,
 }
 
-/// SPPM's pass for a block of frames (see [`crate::transport::run_shared_pass`]).
-pub fn run_shared_pass(
+impl Renderer<'_> {
+    /// SPPM's pass for a block of frames, this renderer holding their static triangles (see
+    /// [`crate::transport::run_shared_pass`]).
+    pub(in crate::transport) fn run_shared_sppm_pass(
+        &self,
+        frames: &[Renderer],
+        pass: &PassSamples,
+        share_eyes: bool,
+        consume: &mut dyn FnMut(SharedPassOutput),
+    ) -> (PassStats, std::time::Duration) {
+        run_shared_pass(self, frames, pass, share_eyes, consume)
+    }
+}
+
+/// SPPM's pass for a block of frames, sharing what they can through `statics`.
+fn run_shared_pass(
     statics: &Renderer,
     frames: &[Renderer],
     pass: &PassSamples,

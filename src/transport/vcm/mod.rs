@@ -35,7 +35,7 @@ mod eye_paths;
 mod light_paths;
 mod merge;
 mod mis;
-pub(super) mod reuse;
+mod reuse;
 mod view;
 
 use rayon::prelude::*;

@@ -37,8 +37,22 @@ use crate::transport::context::{collect_counting, PassSamples, PassStats, PixelE
 use crate::transport::emission::chunk_of;
 use crate::transport::reuse::{FrameEstimates, SharedPassOutput, Swept};
 
-/// VCM's pass for a block of frames (see [`crate::transport::run_shared_pass`]).
-pub fn run_shared_pass(
+impl Renderer<'_> {
+    /// VCM's pass for a block of frames, this renderer holding their static triangles (see
+    /// [`crate::transport::run_shared_pass`]).
+    pub(in crate::transport) fn run_shared_vcm_pass(
+        &self,
+        frames: &[Renderer],
+        pass: &PassSamples,
+        share_eyes: bool,
+        consume: &mut dyn FnMut(SharedPassOutput),
+    ) -> (PassStats, Duration) {
+        run_shared_pass(self, frames, pass, share_eyes, consume)
+    }
+}
+
+/// VCM's pass for a block of frames, sharing what they can through `statics`.
+fn run_shared_pass(
     statics: &Renderer,
     frames: &[Renderer],
     pass: &PassSamples,
