@@ -27,7 +27,7 @@ use glam::Vec3;
 use super::connect::{connect, direct_light};
 use super::finite;
 use super::light_paths::LightVertex;
-use super::merge::{merge, CameraVertex, MergePoints, MergeSet};
+use super::merge::{merge, CameraVertex, KeptMerge, MergeSet};
 use super::mis::{emitter_met, MergeVertex, Partials, PassWeights, Scatter};
 use super::view::View;
 use super::{LightSubpaths, Retraced};
@@ -69,6 +69,8 @@ pub struct Lights<'a> {
     pub merge_sets: &'a [(&'a MergeSet, &'a [u32])],
     /// Where the surfaces merged on end.
     pub open_edges: &'a OpenEdges,
+    /// Keep the camera vertices merged at (for the frames of a block).
+    pub keep_merges: bool,
     /// Paths a frame traced again, in place of the chunks' (reuse across frames).
     pub retraced: Option<&'a Retraced>,
 }
@@ -138,8 +140,8 @@ impl Part {
 pub struct Found {
     /// The pixel's estimate.
     pub estimate: PixelEstimate,
-    /// The camera vertices it merged at.
-    pub merged_at: MergePoints,
+    /// The camera vertices it merged at, where its lights ask to keep them.
+    pub kept: Vec<KeptMerge>,
 }
 
 /// Traces pixel `pixel`'s camera path for `pass`.
@@ -163,7 +165,7 @@ pub fn trace_camera_path(
     };
     let estimate =
         PixelEstimate { radiance: SampledSpectrum::ZERO, laplacian: SampledSpectrum::ZERO, coverage: 1.0 };
-    let mut found = Found { estimate, merged_at: MergePoints::default() };
+    let mut found = Found { estimate, kept: Vec::new() };
     let mut branches = Vec::new();
     loop {
         walk_camera_path(
@@ -194,7 +196,7 @@ fn walk_camera_path(
     stats: &mut PassStats,
     branches: &mut Vec<Walk>,
 ) {
-    let Found { estimate, merged_at } = found;
+    let Found { estimate, kept } = found;
     let scene = renderer.scene;
     let lambda = &pass.wavelengths;
     while walk.state.depth < MAX_DEPTH {
@@ -276,11 +278,13 @@ fn walk_camera_path(
             estimate.radiance +=
                 connect(renderer, pass, weights, at, lights.path_of(pixel), MAX_DEPTH, stats) * scale;
             if walk.merging.merges() {
-                merged_at.note(camera.p);
-                let (merged, merged_laplacian) =
-                    merge(lights.merge_sets, lights.open_edges, weights, &camera, MAX_DEPTH);
-                estimate.radiance += merged * scale;
-                estimate.laplacian += merged_laplacian * scale;
+                let edges = (lights.open_edges, lights.keep_merges);
+                let merged = merge(lights.merge_sets, edges, weights, &camera, MAX_DEPTH);
+                estimate.radiance += merged.radiance * scale;
+                estimate.laplacian += merged.laplacian * scale;
+                if lights.keep_merges {
+                    kept.push(KeptMerge::new(&camera, scale, merged.mass.unwrap_or(1.0)));
+                }
             }
         }
         if walk.merging != MergeVertex::Ahead {

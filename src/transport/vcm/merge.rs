@@ -127,6 +127,7 @@ impl MergeSet {
                     if facing > -EDGE_COSINE {
                         let wall = self.kernel.wall(light.ng, self.positions.at(i), camera.p, ng);
                         Wall::keep_widest(&mut found.walls, wall, light.ng);
+                        found.cut = true;
                     }
                     return;
                 }
@@ -160,65 +161,139 @@ struct Merged {
     sum: SampledSpectrum,
     laplacian: SampledSpectrum,
     walls: [Wall; 3],
+    /// Whether a vertex within the disc lay on a surface that cuts it.
+    cut: bool,
 }
 
-/// The weighted radiance merging finds at `camera` (times its throughput) among the light
-/// vertices of `sets` (one pass's, all of the same radius, each without the vertices of the paths
-/// it lists) in a scene whose surfaces end at
-/// `open_edges`, and the same with the kernel's Laplacian, for paths of at most `max_segments`. Light vertices on surfaces facing more away
-/// than the gather's `EDGE_COSINE` are not merged: they lie on a surface meeting the camera
-/// vertex's at an edge (a wall, seen from the floor), whose plane cuts the disc, or on the other
-/// face of a thin one.
+/// What merging at a camera vertex finds: the weighted radiance (times the vertex's throughput),
+/// the same with the kernel's Laplacian, and the kernel mass its disc keeps on the surface (what
+/// the radiance was divided by), where it was found.
+pub struct Merge {
+    pub radiance: SampledSpectrum,
+    pub laplacian: SampledSpectrum,
+    pub mass: Option<f32>,
+}
+
+/// What merging finds at `camera` among the light vertices of `sets` (one pass's, all of the same
+/// radius, each without the vertices of the paths it lists) in a scene whose surfaces end at
+/// `open_edges`, for paths of at most `max_segments`; the kernel mass is found where the radiance
+/// is not zero, or where `with_mass`. Light vertices on surfaces facing more away than the
+/// gather's `EDGE_COSINE` are not merged: they lie on a surface meeting the camera vertex's at an
+/// edge (a wall, seen from the floor), whose plane cuts the disc, or on the other face of a thin
+/// one.
 pub fn merge(
     sets: &[(&MergeSet, &[u32])],
-    open_edges: &OpenEdges,
+    (open_edges, with_mass): (&OpenEdges, bool),
     weights: &PassWeights,
     camera: &CameraVertex,
     max_segments: u32,
-) -> (SampledSpectrum, SampledSpectrum) {
-    let Some((first, _)) = sets.first() else { return (SampledSpectrum::ZERO, SampledSpectrum::ZERO) };
+) -> Merge {
+    let Some((first, _)) = sets.first() else {
+        return Merge { radiance: SampledSpectrum::ZERO, laplacian: SampledSpectrum::ZERO, mass: None };
+    };
     let mut found = Merged::default();
     for (set, excluded) in sets {
         set.gather((weights, excluded), camera, max_segments, &mut found);
     }
-    let Merged { mut sum, laplacian, walls } = found;
+    let Merged { mut sum, laplacian, walls, .. } = found;
     let kernel = &first.kernel;
     let per_path = 1.0 / weights.light_paths;
-    if sum != SampledSpectrum::ZERO {
+    let mut mass = None;
+    if sum != SampledSpectrum::ZERO || with_mass {
         let cut = Wall::cut(&walls).max(kernel.open_edge_cut(open_edges, camera.p, camera.frame.ng()));
-        sum /= kernel_mass_within(cut);
-    }
-    (sum * (kernel.scale * per_path), laplacian * (kernel.laplacian_scale * per_path))
-}
-
-/// Where a camera path merged: up to [`MergePoints::HELD`] points, and whether it merged at more.
-#[derive(Clone, Copy, Default)]
-pub struct MergePoints {
-    points: [Vec3; MergePoints::HELD],
-    count: usize,
-}
-
-impl MergePoints {
-    /// Points held; a path that merges at more is counted as merging anywhere.
-    const HELD: usize = 4;
-
-    /// Notes a merge at `p`.
-    pub fn note(&mut self, p: Vec3) {
-        if let Some(slot) = self.points.get_mut(self.count) {
-            *slot = p;
+        let kept = kernel_mass_within(cut);
+        if sum != SampledSpectrum::ZERO {
+            sum /= kept;
         }
-        self.count += 1;
+        mass = Some(kept);
+    }
+    Merge {
+        radiance: sum * (kernel.scale * per_path),
+        laplacian: laplacian * (kernel.laplacian_scale * per_path),
+        mass,
+    }
+}
+
+/// A camera vertex where a path merged, kept for the frames of a block (reuse across frames):
+/// the vertex, its BSDF, what its estimates count for, and the kernel mass its disc kept.
+#[derive(Clone, Copy)]
+pub struct KeptMerge {
+    p: Vec3,
+    wo: Vec3,
+    frame: ShadingFrame,
+    bsdf: Bsdf,
+    beta: SampledSpectrum,
+    hero_only: bool,
+    partials: Partials,
+    segments: u32,
+    merging: MergeVertex,
+    media: (Media, u32),
+    scale: f32,
+    mass: f32,
+}
+
+impl KeptMerge {
+    /// `camera`, whose estimates count for `scale`, where merging kept `mass` of the kernel.
+    pub fn new(camera: &CameraVertex, scale: f32, mass: f32) -> Self {
+        KeptMerge {
+            p: camera.p,
+            wo: camera.wo,
+            frame: camera.frame,
+            bsdf: *camera.bsdf,
+            beta: camera.beta,
+            hero_only: camera.hero_only,
+            partials: camera.partials,
+            segments: camera.segments,
+            merging: camera.merging,
+            media: camera.media,
+            scale,
+            mass,
+        }
     }
 
-    /// Whether merging at these points may read a vertex of `set`.
-    pub fn may_read(&self, set: &MergeSet) -> bool {
-        self.count > Self::HELD || self.points[..self.count].iter().any(|&p| set.reaches(p))
+    /// Where it merged.
+    pub fn p(&self) -> Vec3 {
+        self.p
     }
 
-    /// Whether a disc of `radius` merged at these points may reach into the box `(lo, hi)`.
-    pub fn may_reach(&self, (lo, hi): (Vec3, Vec3), radius: f32) -> bool {
-        let outside = |p: Vec3| (lo - p).max(p - hi).max(Vec3::ZERO).length();
-        self.count > Self::HELD || self.points[..self.count].iter().any(|&p| outside(p) <= radius)
+    fn camera(&self) -> CameraVertex<'_> {
+        CameraVertex {
+            p: self.p,
+            wo: self.wo,
+            frame: self.frame,
+            bsdf: &self.bsdf,
+            beta: self.beta,
+            hero_only: self.hero_only,
+            partials: self.partials,
+            segments: self.segments,
+            merging: self.merging,
+            media: self.media,
+        }
+    }
+
+    /// What merging here gains from the light vertices of `added` and loses from those of
+    /// `removed` (radiance and Laplacian, times what its estimates count for), for paths of at
+    /// most `max_segments`; `None` where one of them lies on a surface that cuts the disc (the
+    /// kernel mass would change).
+    pub fn change(
+        &self,
+        (added, removed): (&MergeSet, &MergeSet),
+        weights: &PassWeights,
+        max_segments: u32,
+    ) -> Option<(SampledSpectrum, SampledSpectrum)> {
+        let camera = self.camera();
+        let (mut gained, mut lost) = (Merged::default(), Merged::default());
+        added.gather((weights, &[]), &camera, max_segments, &mut gained);
+        removed.gather((weights, &[]), &camera, max_segments, &mut lost);
+        if gained.cut || lost.cut {
+            return None;
+        }
+        let kernel = &added.kernel;
+        let per_path = 1.0 / weights.light_paths;
+        let radiance = (gained.sum - lost.sum) / self.mass * (kernel.scale * per_path) * self.scale;
+        let laplacian =
+            (gained.laplacian - lost.laplacian) * (kernel.laplacian_scale * per_path) * self.scale;
+        Some((radiance, laplacian))
     }
 }
 

@@ -179,8 +179,9 @@ impl Renderer<'_> {
         let vertices = chunks.par_iter().flat_map_iter(LightSubpaths::vertices_by_path);
         let merge_set = MergeSet::new(vertices, pass.radius);
         let open_edges = &self.scene.open_edges;
+        let merge_sets = &[(&merge_set, &[][..])];
         let lights =
-            Lights { chunks: &chunks, paths, merge_sets: &[(&merge_set, &[])], open_edges, retraced: None };
+            Lights { chunks: &chunks, paths, merge_sets, open_edges, keep_merges: false, retraced: None };
         let pixels = (self.settings.width * self.settings.height) as usize;
         let (mut estimates, stats) = collect_counting(pixels, |pixel| {
             let (found, stats) = trace_camera_path(self, pass, (&weights, &view), &lights, pixel);

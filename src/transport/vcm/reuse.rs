@@ -28,12 +28,14 @@ use rayon::prelude::*;
 
 use super::eye_paths::{trace_camera_path, Lights};
 use super::light_paths::{LightVertex, Splat};
-use super::merge::{MergePoints, MergeSet};
+use super::merge::{KeptMerge, MergeSet};
 use super::mis::PassWeights;
 use super::view::View;
 use super::{LightSubpaths, Retraced};
 use crate::spectrum::SampledSpectrum;
-use crate::transport::context::{collect_counting, PassSamples, PassStats, PixelEstimate, Renderer};
+use crate::transport::context::{
+    collect_counting, PassSamples, PassStats, PixelEstimate, Renderer, MAX_DEPTH,
+};
 use crate::transport::emission::chunk_of;
 use crate::transport::reuse::{FrameEstimates, SharedPassOutput, Swept};
 
@@ -99,21 +101,30 @@ struct SharedPaths {
     splats: Vec<PathSplat>,
     /// Every pixel's estimate from the paths traced for every frame.
     common: Vec<PixelEstimate>,
-    /// Every pixel's camera path as it bears on the frames.
-    pixels: Vec<SharedPixel>,
+    /// Whether a ray of each pixel's camera path meets the moving triangles' box (every frame
+    /// traces those again).
+    watched: Vec<bool>,
+    /// Where each pixel's camera path merged.
+    merges: KeptMerges,
     stats: PassStats,
+}
+
+/// The camera vertices every pixel merged at, pixel after pixel.
+struct KeptMerges {
+    kept: Vec<KeptMerge>,
+    /// Where each pixel's start (and one past the last).
+    starts: Vec<usize>,
+}
+
+impl KeptMerges {
+    /// Where `pixel` merged.
+    fn of(&self, pixel: usize) -> &[KeptMerge] {
+        &self.kept[self.starts[pixel]..self.starts[pixel + 1]]
+    }
 }
 
 /// A light tracing contribution: the pixel, the light path, the radiance.
 type PathSplat = (u32, u32, SampledSpectrum);
-
-/// What a frame must know of a pixel's camera path traced for every frame.
-struct SharedPixel {
-    /// A ray of it meets the moving triangles' box: every frame traces it again.
-    watched: bool,
-    /// Where it merged.
-    merged_at: MergePoints,
-}
 
 /// The light paths one frame changed: its own tracing of them, the vertices of both tracings
 /// bucketed, and their splats by pixel.
@@ -148,21 +159,66 @@ impl SharedPaths {
             MergeSet::new(chunks.par_iter().flat_map_iter(LightSubpaths::vertices_by_path), pass.radius);
         let splats = splats_by_pixel(&chunks);
         let open_edges = &watcher.scene.open_edges;
+        let merge_sets = &[(&merge_set, &[][..])];
         let lights =
-            Lights { chunks: &chunks, paths, merge_sets: &[(&merge_set, &[])], open_edges, retraced: None };
+            Lights { chunks: &chunks, paths, merge_sets, open_edges, keep_merges: true, retraced: None };
         let pixel_count = (watcher.settings.width * watcher.settings.height) as usize;
         let (traced, camera_stats) = collect_counting(pixel_count, |pixel| {
             let (found, stats) = trace_camera_path(watcher, pass, (&weights, &view), &lights, pixel);
-            let near_edges = moving_edges.is_some_and(|b| found.merged_at.may_reach(b, pass.radius));
-            let watched = near_edges || stats.watched_rays > 0;
-            ((found.estimate, SharedPixel { watched, merged_at: found.merged_at }), stats)
+            let reach = |b: (Vec3, Vec3)| found.kept.iter().any(|m| within(m.p(), b, pass.radius));
+            let watched = stats.watched_rays > 0 || moving_edges.is_some_and(reach);
+            ((found.estimate, watched, found.kept), stats)
         });
-        let (mut common, pixels): (Vec<PixelEstimate>, Vec<SharedPixel>) = traced.into_iter().unzip();
+        let mut common = Vec::with_capacity(pixel_count);
+        let (mut watched, mut kept, mut kept_starts) =
+            (Vec::with_capacity(pixel_count), Vec::new(), Vec::new());
+        for (estimate, pixel_watched, merges) in traced {
+            common.push(estimate);
+            watched.push(pixel_watched);
+            kept_starts.push(kept.len());
+            kept.extend(merges);
+        }
+        kept_starts.push(kept.len());
         for &(pixel, _, radiance) in &splats {
             common[pixel as usize].radiance += radiance;
         }
         let stats = chunks.iter().fold(camera_stats, |all, chunk| all + chunk.stats);
-        SharedPaths { weights, view, chunks, paths, watched_paths, merge_set, splats, common, pixels, stats }
+        let merges = KeptMerges { kept, starts: kept_starts };
+        SharedPaths {
+            weights,
+            view,
+            chunks,
+            paths,
+            watched_paths,
+            merge_set,
+            splats,
+            common,
+            watched,
+            merges,
+            stats,
+        }
+    }
+
+    /// What `changes` make of merging at `pixel`'s camera vertices: `Some(None)` where merging
+    /// there reaches no changed vertex, `Some(Some(radiance, laplacian))` the change where it
+    /// does, and `None` where a changed vertex cuts a disc (the pixel must be traced again).
+    #[allow(clippy::option_option)]
+    fn merging_change(
+        &self,
+        changes: &Changes,
+        pixel: usize,
+    ) -> Option<Option<(SampledSpectrum, SampledSpectrum)>> {
+        let sets = (&changes.added, &changes.removed);
+        let mut sum: Option<(SampledSpectrum, SampledSpectrum)> = None;
+        for merge in self.merges.of(pixel) {
+            if !(changes.added.reaches(merge.p()) || changes.removed.reaches(merge.p())) {
+                continue;
+            }
+            let (radiance, laplacian) = merge.change(sets, &self.weights, MAX_DEPTH)?;
+            let (r, l) = sum.unwrap_or((SampledSpectrum::ZERO, SampledSpectrum::ZERO));
+            sum = Some((r + radiance, l + laplacian));
+        }
+        Some(sum)
     }
 
     /// Path `k` as traced for every frame: its vertices and splats.
@@ -234,34 +290,41 @@ impl SharedPaths {
             paths: self.paths,
             merge_sets: &[(&self.merge_set, &changes.paths), (&changes.own, &[])],
             open_edges: &frame.scene.open_edges,
+            keep_merges: false,
             retraced: Some(&changes.retraced),
         };
-        let (estimates, stats) = collect_counting(self.pixels.len(), |pixel| {
-            let shared = &self.pixels[pixel];
+        let (estimates, stats) = collect_counting(self.watched.len(), |pixel| {
             let paired = self.paths > 0 && changed((pixel % self.paths) as u32);
-            let merges_changed =
-                shared.merged_at.may_read(&changes.added) || shared.merged_at.may_read(&changes.removed);
             let (old, new) = (splats_at(&self.splats, pixel), splats_at(&changes.splats, pixel));
-            if shared.watched || paired || merges_changed {
+            let merged = match self.watched[pixel] || paired {
+                true => None,
+                false => self.merging_change(&changes, pixel),
+            };
+            let Some(merged) = merged else {
                 let (found, stats) = trace_camera_path(frame, pass, setup, &lights, pixel);
                 let mut estimate = found.estimate;
                 let kept = old.iter().filter(|&&(_, k, _)| !changed(k));
                 for &(_, _, radiance) in kept.chain(new) {
                     estimate.radiance += radiance;
                 }
-                (Some(estimate), stats)
-            } else if new.is_empty() && old.iter().all(|&(_, k, _)| !changed(k)) {
-                (None, PassStats::default())
-            } else {
-                let mut estimate = self.common[pixel];
-                for &(_, _, radiance) in old.iter().filter(|&&(_, k, _)| changed(k)) {
-                    estimate.radiance -= radiance;
-                }
-                for &(_, _, radiance) in new {
-                    estimate.radiance += radiance;
-                }
-                (Some(estimate), PassStats::default())
+                return (Some(estimate), stats);
+            };
+            let lost = old.iter().filter(|&&(_, k, _)| changed(k));
+            if merged.is_none() && new.is_empty() && lost.clone().next().is_none() {
+                return (None, PassStats::default());
             }
+            let mut estimate = self.common[pixel];
+            if let Some((radiance, laplacian)) = merged {
+                estimate.radiance += radiance;
+                estimate.laplacian += laplacian;
+            }
+            for &(_, _, radiance) in lost {
+                estimate.radiance -= radiance;
+            }
+            for &(_, _, radiance) in new {
+                estimate.radiance += radiance;
+            }
+            (Some(estimate), PassStats::default())
         });
         let differing = (estimates.into_iter().enumerate())
             .filter_map(|(pixel, estimate)| estimate.map(|e| (pixel as u32, e)))
@@ -304,4 +367,9 @@ fn splats_at(splats: &[PathSplat], pixel: usize) -> &[PathSplat] {
     let start = splats.partition_point(|&(p, _, _)| p < pixel);
     let end = start + splats[start..].partition_point(|&(p, _, _)| p == pixel);
     &splats[start..end]
+}
+
+/// Whether `p` lies within `radius` of the box `(lo, hi)`.
+fn within(p: Vec3, (lo, hi): (Vec3, Vec3), radius: f32) -> bool {
+    (lo - p).max(p - hi).max(Vec3::ZERO).length() <= radius
 }
