@@ -18,8 +18,8 @@
 //! count of photons of pass 0's first uniform paths within `PROBE_RADIUS` of those points.
 
 use super::context::{Crop, PassSettings, PhotonSampling, Renderer};
+use super::points::PointGrid;
 use super::sppm::photon_sampling::{trace_pilot, AUTO_VISIBLE_BELOW};
-use super::sppm::points::PointGrid;
 
 /// Pixels of the probe film (the image's aspect ratio, at most the image's pixels).
 const PROBE_PIXELS: f64 = 16_384.0;

@@ -25,6 +25,7 @@ mod kernel;
 mod media;
 mod medium_light;
 mod method;
+mod points;
 pub mod radius;
 mod reuse;
 mod see_through;

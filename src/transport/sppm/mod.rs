@@ -9,6 +9,5 @@ pub(crate) mod gather;
 pub(crate) mod pass;
 pub(crate) mod photon_sampling;
 pub(crate) mod photons;
-pub(crate) mod points;
 mod reuse;
 pub(crate) mod visible;

@@ -22,11 +22,11 @@
 use rayon::prelude::*;
 
 use super::photons::{continue_photon, trace_photon, Photon};
-use super::points::PointGrid;
 use super::visible::EyeResult;
 use crate::sampling::{stream, wrap_unit, Sampler, Stream, Uniforms};
 use crate::transport::context::{Crop, PassSamples, PassSettings, PassStats, PhotonSampling, Renderer};
 use crate::transport::emission::{emit_photon, photon_stream};
+use crate::transport::points::PointGrid;
 
 /// The share of a pass's photon paths traced uniformly first, as the pilot.
 const PILOT_SHARE: usize = 16;

@@ -33,12 +33,12 @@ use rayon::prelude::*;
 
 use super::gather::{sum_over, FirstRound, PhotonSet, PhotonSums};
 use super::photons::{continue_photon, trace_photon, Photon};
-use super::points::{PixelMarks, PointGrid};
 use super::visible::{continue_eye_path, trace_eye_path, with_direct, EyeEnd, EyeEvent, EyeResult};
 use crate::spectrum::SampledSpectrum;
 use crate::transport::context::{collect_counting, PassSamples, PassStats, PixelEstimate, Renderer};
 use crate::transport::emission::{photon_chunks, start_photon, PhotonState};
 use crate::transport::eye::{start_eye_path, EyeState};
+use crate::transport::points::{PixelMarks, PointGrid};
 use crate::transport::reuse::{FrameEstimates, SharedPassOutput, Swept};
 use crate::transport::shadow::ShadowRay;
 
@@ -234,7 +234,7 @@ fn differing_estimates(
             marks.mark(pixel);
         }
     }
-    points.mark_near(changed, &marks);
+    points.mark_near(changed, |photon| photon.p, &marks);
     let change = |pixel: u32| match eyes.watched.binary_search(&pixel) {
         Ok(i) => &changes[i],
         Err(_) => &EyeChange::Same,

@@ -37,6 +37,7 @@ use crate::transport::context::{
     collect_counting, PassSamples, PassStats, PixelEstimate, Renderer, MAX_DEPTH,
 };
 use crate::transport::emission::chunk_of;
+use crate::transport::points::{PixelMarks, PointGrid};
 use crate::transport::reuse::{FrameEstimates, SharedPassOutput, Swept};
 
 impl Renderer<'_> {
@@ -106,6 +107,8 @@ struct SharedPaths {
     watched: Vec<bool>,
     /// Where each pixel's camera path merged.
     merges: KeptMerges,
+    /// The same points, bucketed to find those a changed light vertex reaches.
+    merge_points: PointGrid,
     stats: PassStats,
 }
 
@@ -120,6 +123,11 @@ impl KeptMerges {
     /// Where `pixel` merged.
     fn of(&self, pixel: usize) -> &[KeptMerge] {
         &self.kept[self.starts[pixel]..self.starts[pixel + 1]]
+    }
+
+    /// Every pixel's merging points, with the pixel.
+    fn points(&self) -> impl Iterator<Item = (usize, Vec3)> + '_ {
+        (0..self.starts.len() - 1).flat_map(move |pixel| self.of(pixel).iter().map(move |m| (pixel, m.p())))
     }
 }
 
@@ -141,6 +149,8 @@ struct Changes {
     removed: MergeSet,
     /// What the changed paths trace onto the film in the frame, by pixel.
     splats: Vec<PathSplat>,
+    /// Where the vertices of `added` and `removed` lie.
+    moved: Vec<Vec3>,
 }
 
 impl SharedPaths {
@@ -184,6 +194,7 @@ impl SharedPaths {
         }
         let stats = chunks.iter().fold(camera_stats, |all, chunk| all + chunk.stats);
         let merges = KeptMerges { kept, starts: kept_starts };
+        let merge_points = PointGrid::new(merges.points(), pass.radius);
         SharedPaths {
             weights,
             view,
@@ -195,8 +206,27 @@ impl SharedPaths {
             common,
             watched,
             merges,
+            merge_points,
             stats,
         }
+    }
+
+    /// The pixels `changes` may change, in order: the watched ones, those paired with a changed
+    /// path, those that merge within reach of a changed vertex, and those a changed path traces
+    /// light onto (or traced it onto, as traced for every frame).
+    fn candidates(&self, changes: &Changes) -> Vec<u32> {
+        let pixels = self.watched.len();
+        let marks = PixelMarks::new(pixels);
+        (self.watched.iter().enumerate()).filter(|(_, &w)| w).for_each(|(pixel, _)| marks.mark(pixel as u32));
+        for &k in &changes.paths {
+            if self.paths > 0 {
+                (k as usize..pixels).step_by(self.paths).for_each(|pixel| marks.mark(pixel as u32));
+            }
+            self.shared_path(u64::from(k)).1.iter().for_each(|&(pixel, _)| marks.mark(pixel));
+        }
+        changes.splats.iter().for_each(|&(pixel, _, _)| marks.mark(pixel));
+        self.merge_points.mark_near(&changes.moved, |&p| p, &marks);
+        marks.marked()
     }
 
     /// What `changes` make of merging at `pixel`'s camera vertices: `Some(None)` where merging
@@ -264,6 +294,14 @@ impl SharedPaths {
             self.shared_path(u64::from(k)).0[first..].iter().map(move |v| (k, v))
         });
         let removed = MergeSet::new(removed, pass.radius);
+        let moved = (paths.iter().zip(&first_changed))
+            .flat_map(|(&k, &first)| self.shared_path(u64::from(k)).0[first..].iter().map(|v| v.p))
+            .chain(retraced.chunks.iter().flat_map(|chunk| {
+                by_path(chunk)
+                    .into_iter()
+                    .flat_map(move |(place, _, first)| chunk.path(place)[first..].iter().map(|v| v.p))
+            }))
+            .collect();
         let mut splats: Vec<PathSplat> = (retraced.chunks.iter())
             .flat_map(|chunk| {
                 by_path(chunk).into_iter().flat_map(move |(place, k, _)| {
@@ -272,7 +310,7 @@ impl SharedPaths {
             })
             .collect();
         splats.sort_by_key(|&(pixel, _, _)| pixel);
-        Changes { paths, retraced, own, added, removed, splats }
+        Changes { paths, retraced, own, added, removed, splats, moved }
     }
 
     /// `frame`'s estimates where they differ from the common ones, in pixel order, and the work
@@ -293,7 +331,9 @@ impl SharedPaths {
             keep_merges: false,
             retraced: Some(&changes.retraced),
         };
-        let (estimates, stats) = collect_counting(self.watched.len(), |pixel| {
+        let candidates = self.candidates(&changes);
+        let (estimates, stats) = collect_counting(candidates.len(), |candidate| {
+            let pixel = candidates[candidate] as usize;
             let paired = self.paths > 0 && changed((pixel % self.paths) as u32);
             let (old, new) = (splats_at(&self.splats, pixel), splats_at(&changes.splats, pixel));
             let merged = match self.watched[pixel] || paired {
@@ -326,8 +366,8 @@ impl SharedPaths {
             }
             (Some(estimate), PassStats::default())
         });
-        let differing = (estimates.into_iter().enumerate())
-            .filter_map(|(pixel, estimate)| estimate.map(|e| (pixel as u32, e)))
+        let differing = (candidates.into_iter().zip(estimates))
+            .filter_map(|(pixel, estimate)| estimate.map(|e| (pixel, e)))
             .collect();
         (differing, changes.retraced.chunks.iter().fold(stats, |all, chunk| all + chunk.stats))
     }

@@ -1,5 +1,6 @@
-//! A pass's visible points bucketed by position, to find those a photon reaches: the pixels a
-//! frame's own photons change (reuse across frames), and whether a photon path is seen at all
+//! A pass's points seen from the camera (SPPM's visible points, VCM's merging camera vertices)
+//! bucketed by position, to find those a photon or light vertex reaches: the pixels a frame's own
+//! paths change (reuse across frames), and whether a photon path is seen at all
 //! (visibility-driven photons).
 
 use std::sync::atomic::{AtomicU64, Ordering};
@@ -7,8 +8,7 @@ use std::sync::atomic::{AtomicU64, Ordering};
 use glam::Vec3;
 use rayon::prelude::*;
 
-use super::photons::Photon;
-use crate::transport::grid::PhotonGrid;
+use super::grid::PhotonGrid;
 
 /// A mark per pixel, set from any thread.
 pub struct PixelMarks(Vec<AtomicU64>);
@@ -60,12 +60,13 @@ impl PointGrid {
         }
     }
 
-    /// Marks the pixels whose visible point lies within the radius of some photon.
-    pub fn mark_near(&self, photons: &[Photon], marks: &PixelMarks) {
-        photons.par_iter().with_min_len(64).for_each(|photon| {
-            self.grid.for_each_near(photon.p, |range| {
+    /// Marks the pixels with a point within the radius of some item of `items` (at `position`).
+    pub fn mark_near<T: Sync>(&self, items: &[T], position: impl Fn(&T) -> Vec3 + Sync, marks: &PixelMarks) {
+        items.par_iter().with_min_len(64).for_each(|item| {
+            let p = position(item);
+            self.grid.for_each_near(p, |range| {
                 for i in range {
-                    if self.positions[i].distance_squared(photon.p) < self.reach2 {
+                    if self.positions[i].distance_squared(p) < self.reach2 {
                         marks.mark(self.pixels[i]);
                     }
                 }
