@@ -366,6 +366,11 @@ impl Accel {
         self.moving.occluded(origin, direction, t_max)
     }
 
+    /// Whether any moving triangle (casting shadows or not) lies on the ray before `t_max`.
+    pub fn moving_hit(&self, origin: Vec3, direction: Vec3, t_max: f32) -> bool {
+        self.moving.nearest(origin, direction, t_max, false).is_some()
+    }
+
     /// The box around the moving triangles, or `None` when nothing moves.
     pub fn moving_bounds(&self) -> Option<(Vec3, Vec3)> {
         let scale = self.moving.scale;

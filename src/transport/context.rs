@@ -301,6 +301,17 @@ pub struct Renderer<'a> {
     /// The box that moving triangles fill in some frame, where this renderer traces paths that a
     /// block of frames shares: rays that meet it are counted in [`PassStats::watched_rays`].
     watched: Option<(Vec3, Vec3)>,
+    /// Whether the rays that meet the watched box are also logged ([`Renderer::take_watched`]).
+    logs_watched: bool,
+}
+
+/// A ray: origin, unit direction, and how far it runs.
+pub type Ray = (Vec3, Vec3, f32);
+
+thread_local! {
+    /// The watched rays a renderer that logs them traced on this thread, since they were last
+    /// taken.
+    static WATCHED: std::cell::RefCell<Vec<Ray>> = const { std::cell::RefCell::new(Vec::new()) };
 }
 
 /// The insides paths start in.
@@ -359,6 +370,7 @@ impl<'a> Renderer<'a> {
             has_scattering: media_scatter(&scene.materials, &scene.fog),
             start_media: StartMedia::default(),
             watched: None,
+            logs_watched: false,
         };
         renderer.start_media = StartMedia::of(&renderer);
         renderer
@@ -380,12 +392,25 @@ impl<'a> Renderer<'a> {
         Renderer { watched: swept, ..self }
     }
 
+    /// This renderer, logging the rays that meet the watched box on the thread that traces them.
+    pub(super) fn logging_watched(self) -> Self {
+        Renderer { logs_watched: true, ..self }
+    }
+
     /// Counts the ray from `origin` along `direction` up to `t_max` in `stats` where it meets
-    /// the watched box.
+    /// the watched box, and logs it where this renderer logs them.
     pub(super) fn watch(&self, origin: Vec3, direction: Vec3, t_max: f32, stats: &mut PassStats) {
         if self.watched.is_some_and(|b| ray_meets_box(origin, direction, t_max, b)) {
             stats.watched_rays += 1;
+            if self.logs_watched {
+                WATCHED.with(|log| log.borrow_mut().push((origin, direction, t_max)));
+            }
         }
+    }
+
+    /// The watched rays logged on this thread since they were last taken.
+    pub(super) fn take_watched() -> Vec<Ray> {
+        WATCHED.with(|log| std::mem::take(&mut *log.borrow_mut()))
     }
 
     /// Whether the camera and every light start in the same volumes as `other`'s.

@@ -34,7 +34,7 @@ use super::view::View;
 use super::{LightSubpaths, Retraced};
 use crate::spectrum::SampledSpectrum;
 use crate::transport::context::{
-    collect_counting, PassSamples, PassStats, PixelEstimate, Renderer, MAX_DEPTH,
+    collect_counting, PassSamples, PassStats, PixelEstimate, Ray, Renderer, MAX_DEPTH,
 };
 use crate::transport::emission::chunk_of;
 use crate::transport::points::{PixelMarks, PointGrid};
@@ -71,7 +71,8 @@ fn run_shared_pass(
         return (PassStats::default(), Duration::ZERO);
     }
     let swept = Swept::of(frames).0;
-    let watcher = Renderer::choosing_lights_as(statics, statics.scene, statics.accel).watching(swept);
+    let watcher =
+        Renderer::choosing_lights_as(statics, statics.scene, statics.accel).watching(swept).logging_watched();
     // Where the surfaces' open edges differ between frames, the moving ones lie in the box.
     let edges_move = !frames.iter().all(|f| Arc::ptr_eq(&f.scene.open_edges, &statics.scene.open_edges));
     let shared = SharedPaths::trace(&watcher, pass, swept.filter(|_| edges_move));
@@ -102,14 +103,43 @@ struct SharedPaths {
     splats: Vec<PathSplat>,
     /// Every pixel's estimate from the paths traced for every frame.
     common: Vec<PixelEstimate>,
-    /// Whether a ray of each pixel's camera path meets the moving triangles' box (every frame
-    /// traces those again).
-    watched: Vec<bool>,
+    /// The pixels whose camera paths have rays that meet the moving triangles' box.
+    watched: Watched,
+    /// Pixels in all.
+    pixels: usize,
     /// Where each pixel's camera path merged.
     merges: KeptMerges,
     /// The same points, bucketed to find those a changed light vertex reaches.
     merge_points: PointGrid,
     stats: PassStats,
+}
+
+/// The pixels whose camera paths have rays that meet the moving triangles' box, with those rays.
+#[derive(Default)]
+struct Watched {
+    /// The pixels, increasing.
+    pixels: Vec<u32>,
+    /// Where each one's rays start (and one past the last).
+    starts: Vec<usize>,
+    rays: Vec<Ray>,
+    /// Whether the pixel merges within reach of open edges that move (every frame traces it).
+    near_edges: Vec<bool>,
+}
+
+impl Watched {
+    /// The pixels whose camera paths `frame` changes, increasing: those with a ray that meets one
+    /// of its moving triangles (the others meet the same static triangles in every frame).
+    fn changed_in(&self, frame: &Renderer) -> Vec<u32> {
+        (0..self.pixels.len())
+            .into_par_iter()
+            .with_min_len(64)
+            .filter(|&i| {
+                let rays = &self.rays[self.starts[i]..self.starts[i + 1]];
+                self.near_edges[i] || rays.iter().any(|&(o, d, t)| frame.accel.moving_hit(o, d, t))
+            })
+            .map(|i| self.pixels[i])
+            .collect()
+    }
 }
 
 /// The camera vertices every pixel merged at, pixel after pixel.
@@ -174,20 +204,26 @@ impl SharedPaths {
             Lights { chunks: &chunks, paths, merge_sets, open_edges, keep_merges: true, retraced: None };
         let pixel_count = (watcher.settings.width * watcher.settings.height) as usize;
         let (traced, camera_stats) = collect_counting(pixel_count, |pixel| {
+            Renderer::take_watched();
             let (found, stats) = trace_camera_path(watcher, pass, (&weights, &view), &lights, pixel);
+            let rays = if stats.watched_rays > 0 { Renderer::take_watched() } else { Vec::new() };
             let reach = |b: (Vec3, Vec3)| found.kept.iter().any(|m| within(m.p(), b, pass.radius));
-            let watched = stats.watched_rays > 0 || moving_edges.is_some_and(reach);
-            ((found.estimate, watched, found.kept), stats)
+            ((found.estimate, rays, moving_edges.is_some_and(reach), found.kept), stats)
         });
         let mut common = Vec::with_capacity(pixel_count);
-        let (mut watched, mut kept, mut kept_starts) =
-            (Vec::with_capacity(pixel_count), Vec::new(), Vec::new());
-        for (estimate, pixel_watched, merges) in traced {
+        let (mut watched, mut kept, mut kept_starts) = (Watched::default(), Vec::new(), Vec::new());
+        for (pixel, (estimate, rays, near_edges, merges)) in traced.into_iter().enumerate() {
             common.push(estimate);
-            watched.push(pixel_watched);
+            if near_edges || !rays.is_empty() {
+                watched.pixels.push(pixel as u32);
+                watched.starts.push(watched.rays.len());
+                watched.rays.extend(rays);
+                watched.near_edges.push(near_edges);
+            }
             kept_starts.push(kept.len());
             kept.extend(merges);
         }
+        watched.starts.push(watched.rays.len());
         kept_starts.push(kept.len());
         for &(pixel, _, radiance) in &splats {
             common[pixel as usize].radiance += radiance;
@@ -205,19 +241,21 @@ impl SharedPaths {
             splats,
             common,
             watched,
+            pixels: pixel_count,
             merges,
             merge_points,
             stats,
         }
     }
 
-    /// The pixels `changes` may change, in order: the watched ones, those paired with a changed
+    /// The pixels `changes` may change, in order: `traced_again` (watched ones the frame's moving
+    /// triangles change), those paired with a changed
     /// path, those that merge within reach of a changed vertex, and those a changed path traces
     /// light onto (or traced it onto, as traced for every frame).
-    fn candidates(&self, changes: &Changes) -> Vec<u32> {
-        let pixels = self.watched.len();
+    fn candidates(&self, changes: &Changes, traced_again: &[u32]) -> Vec<u32> {
+        let pixels = self.pixels;
         let marks = PixelMarks::new(pixels);
-        (self.watched.iter().enumerate()).filter(|(_, &w)| w).for_each(|(pixel, _)| marks.mark(pixel as u32));
+        traced_again.iter().for_each(|&pixel| marks.mark(pixel));
         for &k in &changes.paths {
             if self.paths > 0 {
                 (k as usize..pixels).step_by(self.paths).for_each(|pixel| marks.mark(pixel as u32));
@@ -331,12 +369,13 @@ impl SharedPaths {
             keep_merges: false,
             retraced: Some(&changes.retraced),
         };
-        let candidates = self.candidates(&changes);
+        let traced_again = self.watched.changed_in(frame);
+        let candidates = self.candidates(&changes, &traced_again);
         let (estimates, stats) = collect_counting(candidates.len(), |candidate| {
             let pixel = candidates[candidate] as usize;
             let paired = self.paths > 0 && changed((pixel % self.paths) as u32);
             let (old, new) = (splats_at(&self.splats, pixel), splats_at(&changes.splats, pixel));
-            let merged = match self.watched[pixel] || paired {
+            let merged = match paired || traced_again.binary_search(&(pixel as u32)).is_ok() {
                 true => None,
                 false => self.merging_change(&changes, pixel),
             };
