@@ -93,16 +93,6 @@ impl MergeSet {
         MergeSet { sorted, positions, grid, kernel: Kernel::new(radius) }
     }
 
-    /// Whether a light vertex lies within the radius of `p` (where merging at `p` would read
-    /// it).
-    pub fn reaches(&self, p: Vec3) -> bool {
-        let mut found = false;
-        self.grid.for_each_near(p, |range| {
-            self.positions.for_each_within(range, p, self.kernel.r2, |_, _| found = true);
-        });
-        found
-    }
-
     /// Adds what merging finds at `camera` among this set's light vertices to `found`, leaving
     /// out those of the paths `excluded` (increasing).
     fn gather(
@@ -122,6 +112,7 @@ impl MergeSet {
                 if !excluded.is_empty() && excluded.binary_search(&light.path).is_ok() {
                     return;
                 }
+                found.reached = true;
                 let facing = light.ng.dot(front);
                 if facing < EDGE_COSINE {
                     if facing > -EDGE_COSINE {
@@ -163,6 +154,8 @@ struct Merged {
     walls: [Wall; 3],
     /// Whether a vertex within the disc lay on a surface that cuts it.
     cut: bool,
+    /// Whether any vertex lay within the disc.
+    reached: bool,
 }
 
 /// What merging at a camera vertex finds: the weighted radiance (times the vertex's throughput),
@@ -273,14 +266,15 @@ impl KeptMerge {
 
     /// What merging here gains from the light vertices of `added` and loses from those of
     /// `removed` (radiance and Laplacian, times what its estimates count for), for paths of at
-    /// most `max_segments`; `None` where one of them lies on a surface that cuts the disc (the
-    /// kernel mass would change).
+    /// most `max_segments`: `Some(None)` where none lies within the disc, `None` where one of
+    /// them lies on a surface that cuts the disc (the kernel mass would change).
+    #[allow(clippy::option_option)]
     pub fn change(
         &self,
         (added, removed): (&MergeSet, &MergeSet),
         weights: &PassWeights,
         max_segments: u32,
-    ) -> Option<(SampledSpectrum, SampledSpectrum)> {
+    ) -> Option<Option<(SampledSpectrum, SampledSpectrum)>> {
         let camera = self.camera();
         let (mut gained, mut lost) = (Merged::default(), Merged::default());
         added.gather((weights, &[]), &camera, max_segments, &mut gained);
@@ -288,12 +282,15 @@ impl KeptMerge {
         if gained.cut || lost.cut {
             return None;
         }
+        if !(gained.reached || lost.reached) {
+            return Some(None);
+        }
         let kernel = &added.kernel;
         let per_path = 1.0 / weights.light_paths;
         let radiance = (gained.sum - lost.sum) / self.mass * (kernel.scale * per_path) * self.scale;
         let laplacian =
             (gained.laplacian - lost.laplacian) * (kernel.laplacian_scale * per_path) * self.scale;
-        Some((radiance, laplacian))
+        Some(Some((radiance, laplacian)))
     }
 }
 

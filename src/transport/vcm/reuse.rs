@@ -279,10 +279,7 @@ impl SharedPaths {
         let sets = (&changes.added, &changes.removed);
         let mut sum: Option<(SampledSpectrum, SampledSpectrum)> = None;
         for merge in self.merges.of(pixel) {
-            if !(changes.added.reaches(merge.p()) || changes.removed.reaches(merge.p())) {
-                continue;
-            }
-            let (radiance, laplacian) = merge.change(sets, &self.weights, MAX_DEPTH)?;
+            let Some((radiance, laplacian)) = merge.change(sets, &self.weights, MAX_DEPTH)? else { continue };
             let (r, l) = sum.unwrap_or((SampledSpectrum::ZERO, SampledSpectrum::ZERO));
             sum = Some((r + radiance, l + laplacian));
         }
