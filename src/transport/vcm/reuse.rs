@@ -210,26 +210,11 @@ impl SharedPaths {
             let reach = |b: (Vec3, Vec3)| found.kept.iter().any(|m| within(m.p(), b, pass.radius));
             ((found.estimate, rays, moving_edges.is_some_and(reach), found.kept), stats)
         });
-        let mut common = Vec::with_capacity(pixel_count);
-        let (mut watched, mut kept, mut kept_starts) = (Watched::default(), Vec::new(), Vec::new());
-        for (pixel, (estimate, rays, near_edges, merges)) in traced.into_iter().enumerate() {
-            common.push(estimate);
-            if near_edges || !rays.is_empty() {
-                watched.pixels.push(pixel as u32);
-                watched.starts.push(watched.rays.len());
-                watched.rays.extend(rays);
-                watched.near_edges.push(near_edges);
-            }
-            kept_starts.push(kept.len());
-            kept.extend(merges);
-        }
-        watched.starts.push(watched.rays.len());
-        kept_starts.push(kept.len());
+        let (mut common, watched, merges) = gather_pixels(traced);
         for &(pixel, _, radiance) in &splats {
             common[pixel as usize].radiance += radiance;
         }
         let stats = chunks.iter().fold(camera_stats, |all, chunk| all + chunk.stats);
-        let merges = KeptMerges { kept, starts: kept_starts };
         let merge_points = PointGrid::new(merges.points(), pass.radius);
         SharedPaths {
             weights,
@@ -249,9 +234,9 @@ impl SharedPaths {
     }
 
     /// The pixels `changes` may change, in order: `traced_again` (watched ones the frame's moving
-    /// triangles change), those paired with a changed
-    /// path, those that merge within reach of a changed vertex, and those a changed path traces
-    /// light onto (or traced it onto, as traced for every frame).
+    /// triangles change), those paired with a changed path, those that merge within reach of a
+    /// changed vertex, and those a changed path traces light onto (or traced it onto, as traced
+    /// for every frame).
     fn candidates(&self, changes: &Changes, traced_again: &[u32]) -> Vec<u32> {
         let pixels = self.pixels;
         let marks = PixelMarks::new(pixels);
@@ -407,6 +392,30 @@ impl SharedPaths {
             .collect();
         (differing, changes.retraced.chunks.iter().fold(stats, |all, chunk| all + chunk.stats))
     }
+}
+
+/// Every pixel's common estimate, its watched rays (where it has some, or merges near moving open
+/// edges) and its merging camera vertices, from `(estimate, rays, near moving edges, merges)` per
+/// pixel.
+fn gather_pixels(
+    traced: Vec<(PixelEstimate, Vec<Ray>, bool, Vec<KeptMerge>)>,
+) -> (Vec<PixelEstimate>, Watched, KeptMerges) {
+    let mut common = Vec::with_capacity(traced.len());
+    let (mut watched, mut kept, mut starts) = (Watched::default(), Vec::new(), Vec::new());
+    for (pixel, (estimate, rays, near_edges, merges)) in traced.into_iter().enumerate() {
+        common.push(estimate);
+        if near_edges || !rays.is_empty() {
+            watched.pixels.push(pixel as u32);
+            watched.starts.push(watched.rays.len());
+            watched.rays.extend(rays);
+            watched.near_edges.push(near_edges);
+        }
+        starts.push(kept.len());
+        kept.extend(merges);
+    }
+    watched.starts.push(watched.rays.len());
+    starts.push(kept.len());
+    (common, watched, KeptMerges { kept, starts })
 }
 
 /// Where two tracings of a light path differ: `None` where they came out the same (the same
