@@ -382,20 +382,27 @@ fn shared_random_numbers_halve_flicker_in_static_regions() {
 /// frames renders them one at a time, with the same images (up to rounding).
 #[test]
 fn blocks_are_deterministic_and_follow_the_memory_budget() {
-    let dir = tempfile::tempdir().unwrap();
-    let scene = bundled_scene("shot.gltf");
-    let mut s = settings(&scene, &dir.path().join("two"), 4);
-    s.frames = vec![5, 6, 7];
-    s.resolution = Some([48, 36]);
-    assert_eq!(render_frames(&s, 2).block_frames, 3);
-    let one = RenderSettings { out_dir: dir.path().join("one"), ..s.clone() };
-    render_frames(&one, 1);
-    let small = RenderSettings { out_dir: dir.path().join("small"), memory_budget: 1 << 10, ..s.clone() };
-    assert_eq!(render_frames(&small, 2).block_frames, 1);
-    for f in [5, 6, 7] {
-        let (a, b) = (frame_image(&s, f), frame_image(&one, f));
-        assert!(a.rgb == b.rgb, "frame {f}: 1 and 2 threads differ");
-        assert_same_up_to_rounding(&frame_image(&small, f), &a, &format!("frame {f} one at a time"));
+    for method in [Method::Sppm, Method::Vcm] {
+        let dir = tempfile::tempdir().unwrap();
+        let scene = bundled_scene("shot.gltf");
+        let mut s = settings(&scene, &dir.path().join("two"), 4);
+        s.frames = vec![5, 6, 7];
+        s.resolution = Some([48, 36]);
+        s.method = method;
+        assert_eq!(render_frames(&s, 2).block_frames, 3);
+        let one = RenderSettings { out_dir: dir.path().join("one"), ..s.clone() };
+        render_frames(&one, 1);
+        let small = RenderSettings { out_dir: dir.path().join("small"), memory_budget: 1 << 10, ..s.clone() };
+        assert_eq!(render_frames(&small, 2).block_frames, 1);
+        for f in [5, 6, 7] {
+            let (a, b) = (frame_image(&s, f), frame_image(&one, f));
+            assert!(a.rgb == b.rgb, "{method:?} frame {f}: 1 and 2 threads differ");
+            assert_same_up_to_rounding(
+                &frame_image(&small, f),
+                &a,
+                &format!("{method:?} frame {f} one at a time"),
+            );
+        }
     }
 }
 
