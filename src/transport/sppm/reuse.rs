@@ -115,71 +115,61 @@ impl Renderer<'_> {
         share_eyes: bool,
         consume: &mut dyn FnMut(SharedPassOutput),
     ) -> (PassStats, std::time::Duration) {
-        run_shared_pass(self, frames, pass, share_eyes, consume)
-    }
-}
-
-/// SPPM's pass for a block of frames, sharing what they can through `statics`.
-fn run_shared_pass(
-    statics: &Renderer,
-    frames: &[Renderer],
-    pass: &PassSamples,
-    share_eyes: bool,
-    consume: &mut dyn FnMut(SharedPassOutput),
-) -> (PassStats, std::time::Duration) {
-    let start = std::time::Instant::now();
-    let swept = Swept::of(frames);
-    let (shared, mut stats) = trace_shared_photons(statics, pass, swept);
-    let checked: Vec<(FramePhotons, PassStats)> =
-        frames.iter().map(|frame| check_photons(frame, pass, &shared)).collect();
-    let always_valid: Vec<usize> = (0..shared.records.len())
-        .map(|r| checked.iter().map(|(f, _)| f.valid[r]).min().unwrap_or(0))
-        .collect();
-    let common = common_photons(&shared, &always_valid);
-    let common_set = PhotonSet::new(&common, pass.radius, &statics.scene.open_edges);
-    let unstable_set =
-        PhotonSet::new(&unstable_photons(&shared, &always_valid), pass.radius, &statics.scene.open_edges);
-    let same_edges = frames.iter().all(|f| Arc::ptr_eq(&f.scene.open_edges, &statics.scene.open_edges));
-    let eyes = share_eyes.then(|| {
-        let (eyes, eye_stats) =
-            trace_shared_eyes(statics, pass, swept, [&common_set, &unstable_set], same_edges);
-        stats = stats + eye_stats;
-        eyes
-    });
-    let shared_time = start.elapsed();
-    for (index, (frame, (photons, photon_stats))) in frames.iter().zip(&checked).enumerate() {
-        let own = own_photons(&shared, &always_valid, photons);
-        let own_set = PhotonSet::new(&own, pass.radius, &frame.scene.open_edges);
-        let sets = GatherSets { common: &common_set, own: &own_set };
-        let (estimates, eye_stats) = match &eyes {
-            Some(eyes) => match &eyes.common {
-                Some((common, points)) => {
-                    let changed = changed_photons(&shared, photons);
-                    let (differing, s) = differing_estimates(frame, pass, eyes, points, sets, &changed);
-                    (FrameEstimates::Beside { common, differing }, s)
-                }
+        let statics = self;
+        let start = std::time::Instant::now();
+        let swept = Swept::of(frames);
+        let (shared, mut stats) = trace_shared_photons(statics, pass, swept);
+        let checked: Vec<(FramePhotons, PassStats)> =
+            frames.iter().map(|frame| check_photons(frame, pass, &shared)).collect();
+        let always_valid: Vec<usize> = (0..shared.records.len())
+            .map(|r| checked.iter().map(|(f, _)| f.valid[r]).min().unwrap_or(0))
+            .collect();
+        let common = common_photons(&shared, &always_valid);
+        let common_set = PhotonSet::new(&common, pass.radius, &statics.scene.open_edges);
+        let unstable_set =
+            PhotonSet::new(&unstable_photons(&shared, &always_valid), pass.radius, &statics.scene.open_edges);
+        let same_edges = frames.iter().all(|f| Arc::ptr_eq(&f.scene.open_edges, &statics.scene.open_edges));
+        let eyes = share_eyes.then(|| {
+            let (eyes, eye_stats) =
+                trace_shared_eyes(statics, pass, swept, [&common_set, &unstable_set], same_edges);
+            stats = stats + eye_stats;
+            eyes
+        });
+        let shared_time = start.elapsed();
+        for (index, (frame, (photons, photon_stats))) in frames.iter().zip(&checked).enumerate() {
+            let own = own_photons(&shared, &always_valid, photons);
+            let own_set = PhotonSet::new(&own, pass.radius, &frame.scene.open_edges);
+            let sets = GatherSets { common: &common_set, own: &own_set };
+            let (estimates, eye_stats) = match &eyes {
+                Some(eyes) => match &eyes.common {
+                    Some((common, points)) => {
+                        let changed = changed_photons(&shared, photons);
+                        let (differing, s) = differing_estimates(frame, pass, eyes, points, sets, &changed);
+                        (FrameEstimates::Beside { common, differing }, s)
+                    }
+                    None => {
+                        let pixels = eyes.records.len();
+                        let (estimates, s) = collect_counting(pixels, |pixel| {
+                            let (change, s) = frame_eye(frame, pass, &eyes.records[pixel]);
+                            (sets.estimate(eyes, pixel, &change), s)
+                        });
+                        (FrameEstimates::Every(estimates), s)
+                    }
+                },
                 None => {
-                    let pixels = eyes.records.len();
+                    let pixels = (frame.settings.width * frame.settings.height) as usize;
                     let (estimates, s) = collect_counting(pixels, |pixel| {
-                        let (change, s) = frame_eye(frame, pass, &eyes.records[pixel]);
-                        (sets.estimate(eyes, pixel, &change), s)
+                        let (eye, s) = trace_eye_path(frame, pass, pixel);
+                        (sets.estimate_with(&eye, None), s)
                     });
                     (FrameEstimates::Every(estimates), s)
                 }
-            },
-            None => {
-                let pixels = (frame.settings.width * frame.settings.height) as usize;
-                let (estimates, s) = collect_counting(pixels, |pixel| {
-                    let (eye, s) = trace_eye_path(frame, pass, pixel);
-                    (sets.estimate_with(&eye, None), s)
-                });
-                (FrameEstimates::Every(estimates), s)
-            }
-        };
-        let frame_stats = *photon_stats + eye_stats;
-        consume(SharedPassOutput { frame: index, estimates, stats: frame_stats });
+            };
+            let frame_stats = *photon_stats + eye_stats;
+            consume(SharedPassOutput { frame: index, estimates, stats: frame_stats });
+        }
+        (stats, shared_time)
     }
-    (stats, shared_time)
 }
 
 /// The photon sets a frame gathers from: the common photons and its own.

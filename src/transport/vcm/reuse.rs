@@ -50,39 +50,34 @@ impl Renderer<'_> {
         share_eyes: bool,
         consume: &mut dyn FnMut(SharedPassOutput),
     ) -> (PassStats, Duration) {
-        run_shared_pass(self, frames, pass, share_eyes, consume)
-    }
-}
-
-/// VCM's pass for a block of frames, sharing what they can through `statics`.
-fn run_shared_pass(
-    statics: &Renderer,
-    frames: &[Renderer],
-    pass: &PassSamples,
-    share_eyes: bool,
-    consume: &mut dyn FnMut(SharedPassOutput),
-) -> (PassStats, Duration) {
-    let start = Instant::now();
-    if !(share_eyes && frames.iter().all(|f| f.starts_in_same_media(statics))) {
-        for (index, frame) in frames.iter().enumerate() {
-            let (estimates, stats) = frame.run_vcm_pass(pass);
-            consume(SharedPassOutput { frame: index, estimates: FrameEstimates::Every(estimates), stats });
+        let statics = self;
+        let start = Instant::now();
+        if !(share_eyes && frames.iter().all(|f| f.starts_in_same_media(statics))) {
+            for (index, frame) in frames.iter().enumerate() {
+                let (estimates, stats) = frame.run_vcm_pass(pass);
+                consume(SharedPassOutput {
+                    frame: index,
+                    estimates: FrameEstimates::Every(estimates),
+                    stats,
+                });
+            }
+            return (PassStats::default(), Duration::ZERO);
         }
-        return (PassStats::default(), Duration::ZERO);
+        let swept = Swept::of(frames).0;
+        let watcher = Renderer::choosing_lights_as(statics, statics.scene, statics.accel)
+            .watching(swept)
+            .logging_watched();
+        // Where the surfaces' open edges differ between frames, the moving ones lie in the box.
+        let edges_move = !frames.iter().all(|f| Arc::ptr_eq(&f.scene.open_edges, &statics.scene.open_edges));
+        let shared = SharedPaths::trace(&watcher, pass, swept.filter(|_| edges_move));
+        let shared_time = start.elapsed();
+        for (index, frame) in frames.iter().enumerate() {
+            let (differing, stats) = shared.frame_estimates(frame, pass);
+            let estimates = FrameEstimates::Beside { common: &shared.common, differing };
+            consume(SharedPassOutput { frame: index, estimates, stats });
+        }
+        (shared.stats, shared_time)
     }
-    let swept = Swept::of(frames).0;
-    let watcher =
-        Renderer::choosing_lights_as(statics, statics.scene, statics.accel).watching(swept).logging_watched();
-    // Where the surfaces' open edges differ between frames, the moving ones lie in the box.
-    let edges_move = !frames.iter().all(|f| Arc::ptr_eq(&f.scene.open_edges, &statics.scene.open_edges));
-    let shared = SharedPaths::trace(&watcher, pass, swept.filter(|_| edges_move));
-    let shared_time = start.elapsed();
-    for (index, frame) in frames.iter().enumerate() {
-        let (differing, stats) = shared.frame_estimates(frame, pass);
-        let estimates = FrameEstimates::Beside { common: &shared.common, differing };
-        consume(SharedPassOutput { frame: index, estimates, stats });
-    }
-    (shared.stats, shared_time)
 }
 
 /// A pass's paths traced once for every frame of a block.
